@@ -1,0 +1,1 @@
+//! Code generator (see issue "Use it from C, GLSL and WGSL").

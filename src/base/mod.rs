@@ -1,0 +1,95 @@
+//! The base distribution `p0(x0 | wi)` and the deterministic map from the renderer's
+//! `u in [0,1]^2` to `x0`.
+//!
+//! - Disk: a diagonal Gaussian, `x0_j = mu_j + sigma_j Phi^-1(u_j)`.
+//! - Sphere: a Gaussian in `theta` times a wrapped Cauchy in `phi`.
+//!
+//! The base net's four outputs are the locations and the log-scales; log-scales are clamped
+//! to [`LN_SCALE_MIN`, `LN_SCALE_MAX`] so every density stays finite.
+
+pub mod gaussian;
+pub mod wrapped_cauchy;
+
+use crate::def::{Domain, BASE_OUTPUTS};
+use crate::math::exp;
+
+/// Sharpest scale a base distribution may have: `sigma = gamma = 1e-4`.
+pub const LN_SCALE_MIN: f32 = -9.210_34;
+/// Widest scale: `sigma = gamma = 10`.
+pub const LN_SCALE_MAX: f32 = 2.302_585;
+
+/// `p0(x0 | wi)` for one `wi`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BaseDist {
+    /// `N(mu_0, sigma_0^2) x N(mu_1, sigma_1^2)` on the plane.
+    Disk { mu: [f32; 2], ln_sigma: [f32; 2] },
+    /// `N(mu_theta, sigma^2)` in theta times wrapped Cauchy `(mu_phi, gamma)` in phi.
+    Sphere {
+        mu_theta: f32,
+        ln_sigma: f32,
+        mu_phi: f32,
+        ln_gamma: f32,
+    },
+}
+
+impl BaseDist {
+    /// The distribution from the base net's raw outputs.
+    #[inline]
+    pub fn from_net(domain: Domain, out: [f32; BASE_OUTPUTS]) -> Self {
+        let clamp = |s: f32| s.clamp(LN_SCALE_MIN, LN_SCALE_MAX);
+        match domain {
+            Domain::Disk => BaseDist::Disk {
+                mu: [out[0], out[1]],
+                ln_sigma: [clamp(out[2]), clamp(out[3])],
+            },
+            Domain::Sphere => BaseDist::Sphere {
+                mu_theta: out[0],
+                ln_sigma: clamp(out[1]),
+                mu_phi: out[2],
+                ln_gamma: clamp(out[3]),
+            },
+        }
+    }
+
+    /// `x0` for `u` (phi is not wrapped here; the flow wraps it).
+    #[inline]
+    pub fn sample(&self, u: [f32; 2]) -> [f32; 2] {
+        match *self {
+            BaseDist::Disk { mu, ln_sigma } => [
+                mu[0] + exp(ln_sigma[0]) * gaussian::quantile(u[0]),
+                mu[1] + exp(ln_sigma[1]) * gaussian::quantile(u[1]),
+            ],
+            BaseDist::Sphere {
+                mu_theta,
+                ln_sigma,
+                mu_phi,
+                ln_gamma,
+            } => [
+                mu_theta + exp(ln_sigma) * gaussian::quantile(u[0]),
+                mu_phi + wrapped_cauchy::sample(u[1], exp(ln_gamma)),
+            ],
+        }
+    }
+
+    /// `ln p0(x0)` (density in the flow's coordinates).
+    #[inline]
+    pub fn ln_pdf(&self, x0: [f32; 2]) -> f32 {
+        match *self {
+            BaseDist::Disk { mu, ln_sigma } => {
+                let z0 = (x0[0] - mu[0]) * exp(-ln_sigma[0]);
+                let z1 = (x0[1] - mu[1]) * exp(-ln_sigma[1]);
+                gaussian::ln_pdf(z0) + gaussian::ln_pdf(z1) - ln_sigma[0] - ln_sigma[1]
+            }
+            BaseDist::Sphere {
+                mu_theta,
+                ln_sigma,
+                mu_phi,
+                ln_gamma,
+            } => {
+                let z = (x0[0] - mu_theta) * exp(-ln_sigma);
+                gaussian::ln_pdf(z) - ln_sigma
+                    + wrapped_cauchy::ln_pdf(x0[1] - mu_phi, exp(ln_gamma))
+            }
+        }
+    }
+}

@@ -1,0 +1,213 @@
+//! The compact weight blob: a versioned little-endian binary that carries a model's
+//! definition, its weights (f32 or f16) and a CRC-32. The byte layout is documented in
+//! `docs/blob-format.md`; the constants below are that table.
+//!
+//! Reading validates everything before anything is used and never panics or allocates.
+
+mod crc32;
+mod cursor;
+mod error;
+mod writer;
+
+pub use crc32::crc32;
+pub use error::BlobError;
+pub use writer::{blob_len, write_blob};
+
+use crate::def::{Activation, Domain, ModelDef, ModelName, NetShape, Precision, NAME_CAPACITY};
+use cursor::Cursor;
+
+/// The first 8 bytes of every blob.
+pub const MAGIC: [u8; 8] = *b"DIFFBSDF";
+/// The format version this kernel reads and writes.
+pub const VERSION: u16 = 1;
+/// Bytes before the first weight.
+pub const HEADER_LEN: usize = 64;
+/// Bytes of the trailing checksum.
+pub const CHECKSUM_LEN: usize = 4;
+
+/// A validated blob: its definition and a view of its weights.
+#[derive(Clone, Copy, Debug)]
+pub struct Blob<'a> {
+    pub def: ModelDef,
+    weights: &'a [u8],
+}
+
+impl<'a> Blob<'a> {
+    /// Validates `bytes` completely: magic, version, lengths, checksum, header fields and
+    /// that every weight is finite.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, BlobError> {
+        let mut cur = Cursor::new(bytes);
+        let truncated = BlobError::Truncated {
+            needed: HEADER_LEN + CHECKSUM_LEN,
+            got: bytes.len(),
+        };
+        if cur.take(8).ok_or(truncated)? != MAGIC {
+            return Err(BlobError::BadMagic);
+        }
+        let version = cur.u16().ok_or(truncated)?;
+        if version != VERSION {
+            return Err(BlobError::UnsupportedVersion(version));
+        }
+        let raw = RawHeader::read(&mut cur).ok_or(truncated)?;
+        let precision =
+            Precision::from_code(raw.precision).ok_or(BlobError::UnknownPrecision(raw.precision))?;
+        let total = (raw.param_count as usize)
+            .checked_mul(precision.bytes())
+            .and_then(|w| w.checked_add(HEADER_LEN + CHECKSUM_LEN))
+            .ok_or(BlobError::BadHeader("parameter count overflows"))?;
+        if bytes.len() < total {
+            return Err(BlobError::Truncated {
+                needed: total,
+                got: bytes.len(),
+            });
+        }
+        if bytes.len() > total {
+            return Err(BlobError::TrailingBytes {
+                expected: total,
+                got: bytes.len(),
+            });
+        }
+        let (body, tail) = bytes.split_at(total - CHECKSUM_LEN);
+        let stored = u32::from_le_bytes([tail[0], tail[1], tail[2], tail[3]]);
+        let computed = crc32(body);
+        if stored != computed {
+            return Err(BlobError::ChecksumMismatch { stored, computed });
+        }
+        let def = raw.into_def(precision)?;
+        let weights = &body[HEADER_LEN..];
+        let blob = Blob { def, weights };
+        blob.check_finite()?;
+        Ok(blob)
+    }
+
+    /// The stored weights in blob order, decoded to f32.
+    pub fn weights(&self) -> impl Iterator<Item = f32> + 'a {
+        let precision = self.def.precision;
+        self.weights
+            .chunks_exact(precision.bytes())
+            .map(move |c| match precision {
+                Precision::F32 => f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+                Precision::F16 => half::f16::from_bits(u16::from_le_bytes([c[0], c[1]])).to_f32(),
+            })
+    }
+
+    fn check_finite(&self) -> Result<(), BlobError> {
+        match self.weights().position(|w| !w.is_finite()) {
+            Some(index) => Err(BlobError::NonFiniteWeight { index }),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The header fields after magic and version, as stored (offsets in `docs/blob-format.md`).
+struct RawHeader {
+    domain: u8,
+    precision: u8,
+    activation: u8,
+    base: NetShape,
+    velocity: NetShape,
+    name_len: u8,
+    default_steps: u16,
+    param_count: u32,
+    reserved: u32,
+    name: [u8; NAME_CAPACITY],
+}
+
+impl RawHeader {
+    fn read(cur: &mut Cursor<'_>) -> Option<Self> {
+        let domain = cur.u8()?;
+        let precision = cur.u8()?;
+        let activation = cur.u8()?;
+        let base = read_shape(cur)?;
+        let velocity = read_shape(cur)?;
+        let name_len = cur.u8()?;
+        let default_steps = cur.u16()?;
+        let param_count = cur.u32()?;
+        let reserved = cur.u32()?;
+        let mut name = [0; NAME_CAPACITY];
+        name.copy_from_slice(cur.take(NAME_CAPACITY)?);
+        Some(RawHeader {
+            domain,
+            precision,
+            activation,
+            base,
+            velocity,
+            name_len,
+            default_steps,
+            param_count,
+            reserved,
+            name,
+        })
+    }
+
+    fn into_def(self, precision: Precision) -> Result<ModelDef, BlobError> {
+        let domain = Domain::from_code(self.domain).ok_or(BlobError::UnknownDomain(self.domain))?;
+        let activation = Activation::from_code(self.activation)
+            .ok_or(BlobError::UnknownActivation(self.activation))?;
+        if self.reserved != 0 {
+            return Err(BlobError::BadHeader("reserved bytes are not zero"));
+        }
+        check_shape(self.base, "base net")?;
+        check_shape(self.velocity, "velocity net")?;
+        if self.base.freqs > self.velocity.freqs {
+            return Err(BlobError::BadHeader(
+                "base net has more frequencies than the velocity net",
+            ));
+        }
+        if self.default_steps == 0 {
+            return Err(BlobError::BadHeader("default steps is zero"));
+        }
+        let name_bytes = self
+            .name
+            .get(..self.name_len as usize)
+            .ok_or(BlobError::BadHeader("name longer than 32 bytes"))?;
+        let name = ModelName::from_bytes(name_bytes).ok_or(BlobError::BadHeader("name is not UTF-8"))?;
+        let def = ModelDef {
+            domain,
+            precision,
+            activation,
+            base: self.base,
+            velocity: self.velocity,
+            default_steps: self.default_steps,
+            name,
+        };
+        let from_shape = def.param_count();
+        if from_shape != self.param_count as usize {
+            return Err(BlobError::ParamCountMismatch {
+                declared: self.param_count,
+                from_shape,
+            });
+        }
+        Ok(def)
+    }
+}
+
+/// Largest width and layer count and frequency count a blob may declare (keeps every size
+/// computation far from overflow).
+const MAX_WIDTH: u16 = 1024;
+const MAX_LAYERS: u8 = 16;
+const MAX_FREQS: u8 = 16;
+
+fn read_shape(cur: &mut Cursor<'_>) -> Option<NetShape> {
+    let freqs = cur.u8()?;
+    let width = cur.u16()?;
+    let hidden_layers = cur.u8()?;
+    Some(NetShape {
+        freqs,
+        width,
+        hidden_layers,
+    })
+}
+
+fn check_shape(shape: NetShape, _which: &'static str) -> Result<(), BlobError> {
+    if shape.width == 0 || shape.width > MAX_WIDTH {
+        return Err(BlobError::BadHeader("net width is 0 or above 1024"));
+    }
+    if shape.hidden_layers == 0 || shape.hidden_layers > MAX_LAYERS {
+        return Err(BlobError::BadHeader("hidden layer count is 0 or above 16"));
+    }
+    if shape.freqs > MAX_FREQS {
+        return Err(BlobError::BadHeader("more than 16 encoding frequencies"));
+    }
+    Ok(())
+}

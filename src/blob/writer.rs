@@ -1,0 +1,76 @@
+//! Writes a blob into a caller's buffer (no allocation, so it works in `no_std` too).
+
+use super::{crc32, BlobError, CHECKSUM_LEN, HEADER_LEN, MAGIC, VERSION};
+use crate::def::{ModelDef, NetShape, Precision, NAME_CAPACITY};
+
+/// Bytes of the blob for `def`.
+pub const fn blob_len(def: &ModelDef) -> usize {
+    HEADER_LEN + def.param_count() * def.precision.bytes() + CHECKSUM_LEN
+}
+
+/// Writes `def` and `params` (blob order, see `docs/blob-format.md`) into `out`, rounding
+/// to f16 when `def.precision` says so. Returns the number of bytes written.
+///
+/// Fails if `params` does not hold exactly `def.param_count()` finite values, or `out` is
+/// too small.
+pub fn write_blob(def: &ModelDef, params: &[f32], out: &mut [u8]) -> Result<usize, BlobError> {
+    let count = def.param_count();
+    if params.len() != count {
+        return Err(BlobError::ParamCountMismatch {
+            declared: params.len() as u32,
+            from_shape: count,
+        });
+    }
+    if let Some(index) = params.iter().position(|w| !w.is_finite()) {
+        return Err(BlobError::NonFiniteWeight { index });
+    }
+    let len = blob_len(def);
+    let got = out.len();
+    let out = out
+        .get_mut(..len)
+        .ok_or(BlobError::BufferTooSmall { needed: len, got })?;
+    write_header(def, &mut out[..HEADER_LEN]);
+    let body = &mut out[HEADER_LEN..len - CHECKSUM_LEN];
+    match def.precision {
+        Precision::F32 => {
+            for (dst, w) in body.chunks_exact_mut(4).zip(params) {
+                dst.copy_from_slice(&w.to_le_bytes());
+            }
+        }
+        Precision::F16 => {
+            for (index, (dst, w)) in body.chunks_exact_mut(2).zip(params).enumerate() {
+                let h = half::f16::from_f32(*w);
+                if !h.is_finite() {
+                    return Err(BlobError::NonFiniteWeight { index });
+                }
+                dst.copy_from_slice(&h.to_bits().to_le_bytes());
+            }
+        }
+    }
+    let crc = crc32(&out[..len - CHECKSUM_LEN]);
+    out[len - CHECKSUM_LEN..].copy_from_slice(&crc.to_le_bytes());
+    Ok(len)
+}
+
+fn write_header(def: &ModelDef, h: &mut [u8]) {
+    h.fill(0);
+    h[0..8].copy_from_slice(&MAGIC);
+    h[8..10].copy_from_slice(&VERSION.to_le_bytes());
+    h[10] = def.domain.code();
+    h[11] = def.precision.code();
+    h[12] = def.activation.code();
+    write_shape(&mut h[13..17], def.base);
+    write_shape(&mut h[17..21], def.velocity);
+    h[21] = def.name.as_bytes().len() as u8;
+    h[22..24].copy_from_slice(&def.default_steps.to_le_bytes());
+    h[24..28].copy_from_slice(&(def.param_count() as u32).to_le_bytes());
+    // 28..32 reserved, zero.
+    h[32..32 + def.name.as_bytes().len()].copy_from_slice(def.name.as_bytes());
+    debug_assert!(def.name.as_bytes().len() <= NAME_CAPACITY);
+}
+
+fn write_shape(dst: &mut [u8], shape: NetShape) {
+    dst[0] = shape.freqs;
+    dst[1..3].copy_from_slice(&shape.width.to_le_bytes());
+    dst[3] = shape.hidden_layers;
+}

@@ -1,0 +1,235 @@
+//! The model definition: one value that fully describes a model's architecture. The blob
+//! stores it, the kernel checks it against its compiled shape, and codegen and the trainer
+//! read it.
+
+/// Where the flow lives, and so how a point `x` of the flow maps to a direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Domain {
+    /// Projected unit disk `x = (wo.x, wo.y)`, upper hemisphere only (BRDFs).
+    Disk,
+    /// Spherical coordinates `x = (theta, phi)` over the whole sphere (full BSDFs).
+    Sphere,
+}
+
+impl Domain {
+    /// Number of flow-state features the velocity net sees: `(x, y)` on the disk,
+    /// `(theta, sin phi, cos phi)` on the sphere.
+    pub const fn feature_count(self) -> usize {
+        match self {
+            Domain::Disk => 2,
+            Domain::Sphere => 3,
+        }
+    }
+
+    pub(crate) const fn code(self) -> u8 {
+        match self {
+            Domain::Disk => 0,
+            Domain::Sphere => 1,
+        }
+    }
+
+    pub(crate) const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(Domain::Disk),
+            1 => Some(Domain::Sphere),
+            _ => None,
+        }
+    }
+}
+
+/// How weights are stored in the blob. The kernel evaluates in f32 either way; f16 blobs
+/// are half the size, and generated shaders can evaluate them in f16.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Precision {
+    F32,
+    F16,
+}
+
+impl Precision {
+    /// Bytes per stored weight.
+    pub const fn bytes(self) -> usize {
+        match self {
+            Precision::F32 => 4,
+            Precision::F16 => 2,
+        }
+    }
+
+    pub(crate) const fn code(self) -> u8 {
+        match self {
+            Precision::F32 => 0,
+            Precision::F16 => 1,
+        }
+    }
+
+    pub(crate) const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(Precision::F32),
+            1 => Some(Precision::F16),
+            _ => None,
+        }
+    }
+}
+
+/// Hidden-layer activation. Only SiLU exists today; the blob reserves the byte.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Activation {
+    /// `silu(z) = z * sigmoid(z)`.
+    Silu,
+}
+
+impl Activation {
+    pub(crate) const fn code(self) -> u8 {
+        0
+    }
+
+    pub(crate) const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(Activation::Silu),
+            _ => None,
+        }
+    }
+}
+
+/// Shape of one MLP: the frequencies of its `wi` encoding, its hidden width and its number
+/// of hidden layers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct NetShape {
+    /// NeRF frequencies of the `wi` encoding (`2^k * pi` for `k < freqs`).
+    pub freqs: u8,
+    /// Neurons per hidden layer.
+    pub width: u16,
+    /// Hidden layers (at least 1).
+    pub hidden_layers: u8,
+}
+
+impl NetShape {
+    /// Length of the `wi` encoding: the raw `wi` and a sine and cosine per frequency and axis.
+    pub const fn encoding_len(self) -> usize {
+        encoding_len(self.freqs)
+    }
+}
+
+/// Length of the NeRF encoding of `wi` with `freqs` frequencies: `3 + 6 * freqs`.
+pub const fn encoding_len(freqs: u8) -> usize {
+    3 + 6 * freqs as usize
+}
+
+/// Outputs of the base net: two location and two log-scale parameters.
+pub const BASE_OUTPUTS: usize = 4;
+
+/// Longest model name stored in a blob, in bytes.
+pub const NAME_CAPACITY: usize = 32;
+
+/// A short UTF-8 label stored in the blob (codegen names things after it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ModelName {
+    bytes: [u8; NAME_CAPACITY],
+    len: u8,
+}
+
+impl ModelName {
+    /// The empty name.
+    pub const EMPTY: ModelName = ModelName {
+        bytes: [0; NAME_CAPACITY],
+        len: 0,
+    };
+
+    /// A name from a string; `None` if it is longer than [`NAME_CAPACITY`] bytes.
+    pub fn new(name: &str) -> Option<Self> {
+        Self::from_bytes(name.as_bytes())
+    }
+
+    /// A name from bytes; `None` if too long or not UTF-8.
+    pub fn from_bytes(raw: &[u8]) -> Option<Self> {
+        if raw.len() > NAME_CAPACITY || core::str::from_utf8(raw).is_err() {
+            return None;
+        }
+        let mut bytes = [0; NAME_CAPACITY];
+        bytes[..raw.len()].copy_from_slice(raw);
+        Some(ModelName {
+            bytes,
+            len: raw.len() as u8,
+        })
+    }
+
+    /// The name as text.
+    pub fn as_str(&self) -> &str {
+        core::str::from_utf8(self.as_bytes()).unwrap_or("")
+    }
+
+    /// The name's bytes.
+    pub fn as_bytes(&self) -> &[u8] {
+        self.bytes.get(..self.len as usize).unwrap_or(&[])
+    }
+}
+
+/// Everything that describes a model except its weights.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ModelDef {
+    pub domain: Domain,
+    pub precision: Precision,
+    pub activation: Activation,
+    /// The base net: `wi` encoding -> parameters of `p0(x0 | wi)`.
+    pub base: NetShape,
+    /// The velocity net: `(x features, t, wi encoding)` -> `v`.
+    pub velocity: NetShape,
+    /// Euler steps used when the caller does not choose.
+    pub default_steps: u16,
+    pub name: ModelName,
+}
+
+impl ModelDef {
+    /// The paper's disk model: base 1x16 (3 frequencies), velocity 3x32 (5 frequencies),
+    /// 4 Euler steps.
+    pub const fn paper_disk() -> Self {
+        ModelDef {
+            domain: Domain::Disk,
+            precision: Precision::F32,
+            activation: Activation::Silu,
+            base: NetShape {
+                freqs: 3,
+                width: 16,
+                hidden_layers: 1,
+            },
+            velocity: NetShape {
+                freqs: 5,
+                width: 32,
+                hidden_layers: 3,
+            },
+            default_steps: 4,
+            name: ModelName::EMPTY,
+        }
+    }
+
+    /// The paper's sphere model: as the disk model but velocity 4x32 and 8 Euler steps.
+    pub const fn paper_sphere() -> Self {
+        let mut def = Self::paper_disk();
+        def.domain = Domain::Sphere;
+        def.velocity.hidden_layers = 4;
+        def.default_steps = 8;
+        def
+    }
+
+    /// Inputs of the velocity net's first layer: features, `t`, `wi` encoding.
+    pub const fn velocity_inputs(&self) -> usize {
+        self.domain.feature_count() + 1 + self.velocity.encoding_len()
+    }
+
+    /// Number of weights and biases, in the order the blob stores them.
+    pub const fn param_count(&self) -> usize {
+        let bw = self.base.width as usize;
+        let vw = self.velocity.width as usize;
+        let base = mlp_params(self.base.encoding_len(), bw, self.base.hidden_layers, BASE_OUTPUTS);
+        let vel = mlp_params(self.velocity_inputs(), vw, self.velocity.hidden_layers, 2);
+        base + vel
+    }
+}
+
+/// Parameters of an MLP `inputs -> width^(hidden) -> outputs`, with biases.
+const fn mlp_params(inputs: usize, width: usize, hidden: u8, outputs: usize) -> usize {
+    let hidden = hidden as usize;
+    let first = inputs * width + width;
+    let mid = if hidden > 0 { (hidden - 1) * (width * width + width) } else { 0 };
+    let last = width * outputs + outputs;
+    first + mid + last
+}

@@ -1,0 +1,63 @@
+//! Read-only views of the intermediate quantities, for tests, conformance suites and
+//! tools: the velocity and its Jacobian at a point, the base distribution, a whole
+//! trajectory and the inverse of the flow. None of this is on the sampling hot path.
+
+use crate::base::BaseDist;
+use crate::flow::{step_det, step_time};
+use crate::input::{uniform_pair, unit_direction};
+use crate::model::Model;
+use crate::net::Jacobian;
+use glam::{Vec2, Vec3};
+
+impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
+    Model<BE, BW, BM, VE, VW, VM>
+{
+    /// `v(x, t, wi)` and the hand-derived `dv/dx` at a flow point `x`.
+    pub fn velocity_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<([f32; 2], Jacobian)> {
+        let c = self.condition(unit_direction(wi)?);
+        let step = self.velocity.at_time(&c.cond, t);
+        let (feat, dfeat) = self.def.domain.features_with_derivative(x);
+        Some(self.velocity.velocity_jacobian(&step, feat, dfeat))
+    }
+
+    /// `v(x, t, wi)` alone (the direction-only path).
+    pub fn velocity_only_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<[f32; 2]> {
+        let c = self.condition(unit_direction(wi)?);
+        let step = self.velocity.at_time(&c.cond, t);
+        Some(self.velocity.velocity(&step, self.def.domain.features(x)))
+    }
+
+    /// The base distribution `p0(. | wi)`.
+    pub fn base_distribution(&self, wi: Vec3) -> Option<BaseDist> {
+        Some(self.condition(unit_direction(wi)?).base)
+    }
+
+    /// Writes `x_0 .. x_steps` into `points` (which must hold `steps + 1` points) and
+    /// returns the smallest step determinant `det(I + h dv/dx)` along the way.
+    pub fn trajectory(&self, wi: Vec3, u: Vec2, steps: u32, points: &mut [[f32; 2]]) -> Option<f32> {
+        let c = self.condition(unit_direction(wi)?);
+        let points = points.get_mut(..steps as usize + 1)?;
+        let domain = self.def.domain;
+        let h = 1.0 / steps as f32;
+        let mut x = domain.advance(c.base.sample(uniform_pair(u)?), [0.0, 0.0]);
+        let mut min_det = f32::INFINITY;
+        for (k, slot) in points.iter_mut().enumerate() {
+            *slot = x;
+            if k as u32 == steps {
+                break;
+            }
+            let step = self.velocity.at_time(&c.cond, step_time(k as u32, h));
+            let (feat, dfeat) = domain.features_with_derivative(x);
+            let (v, j) = self.velocity.velocity_jacobian(&step, feat, dfeat);
+            min_det = min_det.min(step_det(h, &j));
+            x = domain.advance(x, [h * v[0], h * v[1]]);
+        }
+        Some(min_det)
+    }
+
+    /// The flow point `x0` that `steps` Euler steps carry to `x`, by the exact inverse.
+    pub fn invert_flow(&self, wi: Vec3, x: [f32; 2], steps: u32) -> Option<[f32; 2]> {
+        let c = self.condition(unit_direction(wi)?);
+        self.flow_inverse(&c, x, steps).map(|(x0, _)| x0)
+    }
+}

@@ -1,0 +1,81 @@
+//! Where the flow lives: the map between flow points `x` and directions, the measure
+//! change to solid angle, the features the velocity net sees and how a step moves `x`.
+
+pub mod disk;
+pub mod sphere;
+
+use crate::def::Domain;
+use crate::net::FEATURES;
+use glam::Vec3;
+
+impl Domain {
+    /// Velocity-net features of `x`.
+    #[inline(always)]
+    pub(crate) fn features(self, x: [f32; 2]) -> [f32; FEATURES] {
+        match self {
+            Domain::Disk => [x[0], x[1], 0.0],
+            Domain::Sphere => [x[0], crate::math::sin(x[1]), crate::math::cos(x[1])],
+        }
+    }
+
+    /// Features of `x` and their derivatives along `x_0` and `x_1`.
+    #[inline(always)]
+    pub(crate) fn features_with_derivative(
+        self,
+        x: [f32; 2],
+    ) -> ([f32; FEATURES], [[f32; FEATURES]; 2]) {
+        match self {
+            Domain::Disk => ([x[0], x[1], 0.0], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+            Domain::Sphere => {
+                let (s, c) = (crate::math::sin(x[1]), crate::math::cos(x[1]));
+                ([x[0], s, c], [[1.0, 0.0, 0.0], [0.0, c, -s]])
+            }
+        }
+    }
+
+    /// `x + d`, with phi wrapped on the sphere.
+    #[inline(always)]
+    pub(crate) fn advance(self, x: [f32; 2], d: [f32; 2]) -> [f32; 2] {
+        match self {
+            Domain::Disk => [x[0] + d[0], x[1] + d[1]],
+            Domain::Sphere => [x[0] + d[0], sphere::wrap(x[1] + d[1])],
+        }
+    }
+
+    /// `a - b`, with the phi difference taken the short way round on the sphere.
+    #[inline(always)]
+    pub(crate) fn difference(self, a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
+        match self {
+            Domain::Disk => [a[0] - b[0], a[1] - b[1]],
+            Domain::Sphere => [a[0] - b[0], sphere::wrap(a[1] - b[1])],
+        }
+    }
+
+    /// The direction of a flow point, and `ln(pdf_w / pdf_x)` there; `None` outside the
+    /// domain.
+    #[inline]
+    pub(crate) fn to_direction(self, x: [f32; 2]) -> Option<Vec3> {
+        match self {
+            Domain::Disk => disk::to_direction(x),
+            Domain::Sphere => sphere::to_direction(x),
+        }
+    }
+
+    /// `ln(pdf_w / pdf_x)` at a flow point already known to be in the domain.
+    #[inline]
+    pub(crate) fn ln_measure(self, x: [f32; 2], wo: Vec3) -> f32 {
+        match self {
+            Domain::Disk => disk::ln_measure(wo),
+            Domain::Sphere => sphere::ln_measure(x[0]),
+        }
+    }
+
+    /// The flow point of a unit direction; `None` where the domain has no density.
+    #[inline]
+    pub(crate) fn from_direction(self, wo: Vec3) -> Option<[f32; 2]> {
+        match self {
+            Domain::Disk => disk::from_direction(wo),
+            Domain::Sphere => sphere::from_direction(wo),
+        }
+    }
+}

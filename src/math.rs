@@ -1,0 +1,82 @@
+//! The math backend, chosen in one place: every transcendental the kernel uses goes
+//! through these wrappers (libm, so the crate builds with no `std`).
+//!
+//! `exp_poly` is the one function the kernel does not take from libm: it is evaluated
+//! 32 times per layer per Euler step, so it is written as plain arithmetic that the
+//! compiler vectorises across a layer. The trainer and the generated shaders use the same
+//! formula, so all of them evaluate the same activation.
+
+#[inline(always)]
+pub(crate) fn sqrt(x: f32) -> f32 {
+    libm::sqrtf(x)
+}
+
+#[inline(always)]
+pub(crate) fn ln(x: f32) -> f32 {
+    libm::logf(x)
+}
+
+#[inline(always)]
+pub(crate) fn exp(x: f32) -> f32 {
+    libm::expf(x)
+}
+
+#[inline(always)]
+pub(crate) fn sin(x: f32) -> f32 {
+    libm::sinf(x)
+}
+
+#[inline(always)]
+pub(crate) fn cos(x: f32) -> f32 {
+    libm::cosf(x)
+}
+
+#[inline(always)]
+pub(crate) fn atan2(y: f32, x: f32) -> f32 {
+    libm::atan2f(y, x)
+}
+
+#[inline(always)]
+pub(crate) fn tanh(x: f32) -> f32 {
+    libm::tanhf(x)
+}
+
+#[inline(always)]
+pub(crate) fn sinh(x: f32) -> f32 {
+    libm::sinhf(x)
+}
+
+#[inline(always)]
+pub(crate) fn floor(x: f32) -> f32 {
+    libm::floorf(x)
+}
+
+/// 1.5 * 2^23: adding and subtracting it rounds an f32 of magnitude < 2^22 to the nearest
+/// integer without a branch or a library call.
+const ROUND_MAGIC: f32 = 12_582_912.0;
+
+/// `exp(x)` for `x` in [-87, 88] (inputs outside are clamped; NaN is never passed here).
+///
+/// `exp(x) = 2^n * exp(r)` with `n = round(x / ln 2)`, `|r| <= ln(2)/2`, and `exp(r)` by its
+/// degree-6 Taylor polynomial (truncation error < 2e-7 relative). Written branch-free so a
+/// loop over a layer vectorises.
+#[inline(always)]
+pub fn exp_poly(x: f32) -> f32 {
+    const LOG2E: f32 = core::f32::consts::LOG2_E;
+    // ln 2 split in a part exact in f32 and the remainder (Cody–Waite reduction).
+    const LN2_HI: f32 = 0.693_145_75;
+    const LN2_LO: f32 = 1.428_606_8e-6;
+    let x = x.clamp(-87.0, 88.0);
+    let n = (x * LOG2E + ROUND_MAGIC) - ROUND_MAGIC;
+    let r = (x - n * LN2_HI) - n * LN2_LO;
+    // Horner form of 1 + r + r^2/2 + r^3/6 + r^4/24 + r^5/120 + r^6/720.
+    let p = 1.0 / 720.0;
+    let p = p * r + 1.0 / 120.0;
+    let p = p * r + 1.0 / 24.0;
+    let p = p * r + 1.0 / 6.0;
+    let p = p * r + 0.5;
+    let p = p * r + 1.0;
+    let p = p * r + 1.0;
+    let scale = f32::from_bits(((n as i32 + 127) as u32) << 23);
+    p * scale
+}

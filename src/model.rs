@@ -1,0 +1,167 @@
+//! A loaded model: its definition and its two nets, sized at compile time.
+
+use crate::blob::{write_blob, Blob, BlobError};
+use crate::def::{encoding_len, ModelDef, Precision};
+use crate::net::{BaseNet, VelocityNet};
+
+/// A model whose sizes are fixed at compile time:
+///
+/// - `BE`, `BW`, `BM`: base net encoding length (`3 + 6 * freqs`), width, hidden layers - 1;
+/// - `VE`, `VW`, `VM`: the same for the velocity net.
+///
+/// A blob of another shape is rejected with [`BlobError::ShapeMismatch`]. The aliases
+/// [`Model3x32`] and [`Model4x32`] are the paper's disk and sphere architectures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Model<
+    const BE: usize,
+    const BW: usize,
+    const BM: usize,
+    const VE: usize,
+    const VW: usize,
+    const VM: usize,
+> {
+    pub(crate) def: ModelDef,
+    pub(crate) base: BaseNet<BE, BW, BM>,
+    pub(crate) velocity: VelocityNet<VE, VW, VM>,
+}
+
+/// Base 1x16 (3 frequencies), velocity 3x32 (5 frequencies): the paper's disk model.
+pub type Model3x32 = Model<21, 16, 0, 33, 32, 2>;
+/// Base 1x16 (3 frequencies), velocity 4x32 (5 frequencies): the paper's sphere model.
+pub type Model4x32 = Model<21, 16, 0, 33, 32, 3>;
+
+impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
+    Model<BE, BW, BM, VE, VW, VM>
+{
+    /// Whether a model of definition `def` has this type's compiled shape.
+    pub const fn accepts(def: &ModelDef) -> bool {
+        encoding_len(def.base.freqs) == BE
+            && def.base.width as usize == BW
+            && def.base.hidden_layers as usize == BM + 1
+            && encoding_len(def.velocity.freqs) == VE
+            && def.velocity.width as usize == VW
+            && def.velocity.hidden_layers as usize == VM + 1
+            && BE <= VE
+    }
+
+    /// Loads and validates a blob.
+    pub fn from_blob(bytes: &[u8]) -> Result<Self, BlobError> {
+        let blob = Blob::parse(bytes)?;
+        let mut model = Self::zeroed(blob.def)?;
+        let mut weights = blob.weights();
+        model.visit_params_mut(|p| *p = weights.next().unwrap_or(0.0));
+        Ok(model)
+    }
+
+    /// Loads a blob into `self` in place (no large stack copy). On error `self` is left
+    /// exactly as it was.
+    pub fn load_into(&mut self, bytes: &[u8]) -> Result<(), BlobError> {
+        let blob = Blob::parse(bytes)?;
+        if !Self::accepts(&blob.def) {
+            return Err(BlobError::ShapeMismatch);
+        }
+        self.def = blob.def;
+        let mut weights = blob.weights();
+        self.visit_params_mut(|p| *p = weights.next().unwrap_or(0.0));
+        Ok(())
+    }
+
+    /// A model of definition `def` with every parameter zero.
+    pub fn zeroed(def: ModelDef) -> Result<Self, BlobError> {
+        if !Self::accepts(&def) {
+            return Err(BlobError::ShapeMismatch);
+        }
+        Ok(Model {
+            def,
+            base: BaseNet::ZERO,
+            velocity: VelocityNet::ZERO,
+        })
+    }
+
+    /// A model from its parameters in blob order (`def.param_count()` finite values).
+    pub fn from_params(def: ModelDef, params: &[f32]) -> Result<Self, BlobError> {
+        let mut model = Self::zeroed(def)?;
+        model.set_params(params)?;
+        Ok(model)
+    }
+
+    /// Replaces every parameter (blob order).
+    pub fn set_params(&mut self, params: &[f32]) -> Result<(), BlobError> {
+        let from_shape = self.def.param_count();
+        if params.len() != from_shape {
+            return Err(BlobError::ParamCountMismatch {
+                declared: params.len() as u32,
+                from_shape,
+            });
+        }
+        if let Some(index) = params.iter().position(|w| !w.is_finite()) {
+            return Err(BlobError::NonFiniteWeight { index });
+        }
+        let mut it = params.iter();
+        self.visit_params_mut(|p| *p = it.next().copied().unwrap_or(0.0));
+        Ok(())
+    }
+
+    /// Copies every parameter, in blob order, into `out`; returns how many were written.
+    pub fn params(&self, out: &mut [f32]) -> Result<usize, BlobError> {
+        let n = self.def.param_count();
+        let got = out.len() * 4;
+        let out = out.get_mut(..n).ok_or(BlobError::BufferTooSmall {
+            needed: n * 4,
+            got,
+        })?;
+        let mut copy = *self;
+        let mut it = out.iter_mut();
+        copy.visit_params_mut(|p| {
+            if let Some(o) = it.next() {
+                *o = *p;
+            }
+        });
+        Ok(n)
+    }
+
+    /// Writes the model as a blob of the given precision into `out`; returns its length.
+    pub fn write_blob(&self, precision: Precision, out: &mut [u8]) -> Result<usize, BlobError> {
+        let mut def = self.def;
+        def.precision = precision;
+        let mut params = [0.0f32; MAX_PARAMS_ON_STACK];
+        let n = def.param_count();
+        let params = params.get_mut(..n).ok_or(BlobError::BadHeader(
+            "model too large to write without allocation",
+        ))?;
+        self.params(params)?;
+        write_blob(&def, params, out)
+    }
+
+    /// The definition.
+    pub fn def(&self) -> &ModelDef {
+        &self.def
+    }
+
+    /// Changes the stored name and default step count (metadata only).
+    pub fn set_metadata(&mut self, name: crate::def::ModelName, default_steps: u16) {
+        self.def.name = name;
+        self.def.default_steps = default_steps.max(1);
+    }
+
+    /// The base net.
+    pub fn base_net(&self) -> &BaseNet<BE, BW, BM> {
+        &self.base
+    }
+
+    /// The velocity net.
+    pub fn velocity_net(&self) -> &VelocityNet<VE, VW, VM> {
+        &self.velocity
+    }
+
+    /// Visits every parameter in blob order (`docs/blob-format.md`).
+    fn visit_params_mut(&mut self, mut f: impl FnMut(&mut f32)) {
+        let features = self.def.domain.feature_count();
+        self.base.visit_mut(&mut f);
+        self.velocity.visit_mut(features, &mut f);
+    }
+}
+
+/// Largest parameter count [`Model::write_blob`] handles (it stages parameters on the
+/// stack); larger models are written with [`crate::blob::write_blob`] from a caller buffer.
+pub const MAX_PARAMS_ON_STACK: usize = 16_384;

@@ -1,0 +1,129 @@
+//! The velocity net `v(x, t, wi)` and its hand-derived input Jacobian `dv/dx`.
+//!
+//! The first layer is split by input: `z1 = Wx feat(x) + wt t + (Wc enc(wi) + b)`. The
+//! bracket does not depend on `x` or `t`, so it is computed once per call
+//! ([`VelocityNet::condition`]); each Euler step adds `wt t` ([`VelocityNet::at_time`]);
+//! each evaluation adds the state columns.
+//!
+//! Forward-mode Jacobian: with `dz1/dx_j = Wx dfeat/dx_j`, every hidden layer maps
+//! `dh = silu'(z) * dz` and `dz' = W dh`, and the readout gives `dv/dx_j = Wout dh_j`.
+
+use super::activation::{silu_layer, silu_layer_tangents};
+use super::dense::{Dense, Readout};
+
+/// Flow-state features: `(x, y, 0)` on the disk, `(theta, sin phi, cos phi)` on the sphere.
+pub const FEATURES: usize = 3;
+
+/// A 2x2 matrix, row-major: `j[r][c] = dv_r / dx_c`.
+pub type Jacobian = [[f32; 2]; 2];
+
+/// `E` encoding inputs, `M + 1` hidden layers of width `W`, 2 outputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VelocityNet<const E: usize, const W: usize, const M: usize> {
+    /// First-layer columns of the state features (the third is zero for disk models).
+    pub wx: [[f32; W]; FEATURES],
+    /// First-layer column of the time `t`.
+    pub wt: [f32; W],
+    /// First-layer columns of the `wi` encoding, and the first layer's bias.
+    pub wc: Dense<E, W>,
+    pub mid: [Dense<W, W>; M],
+    pub out: Readout<W, 2>,
+}
+
+impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
+    pub const ZERO: Self = VelocityNet {
+        wx: [[0.0; W]; FEATURES],
+        wt: [0.0; W],
+        wc: Dense::ZERO,
+        mid: [Dense::ZERO; M],
+        out: Readout::ZERO,
+    };
+
+    /// `Wc enc(wi) + b`: the part of the first layer fixed for one call.
+    #[inline]
+    pub fn condition(&self, enc: &[f32; E]) -> [f32; W] {
+        self.wc.forward(enc)
+    }
+
+    /// `condition + wt t`: the part of the first layer fixed for one Euler step.
+    #[inline(always)]
+    pub fn at_time(&self, cond: &[f32; W], t: f32) -> [f32; W] {
+        let mut z = *cond;
+        for (zo, &w) in z.iter_mut().zip(&self.wt) {
+            *zo += w * t;
+        }
+        z
+    }
+
+    #[inline(always)]
+    fn first_layer(&self, step: &[f32; W], feat: [f32; FEATURES]) -> [f32; W] {
+        let mut z = *step;
+        for (col, &f) in self.wx.iter().zip(&feat) {
+            for (zo, &w) in z.iter_mut().zip(col) {
+                *zo += w * f;
+            }
+        }
+        z
+    }
+
+    /// `v` at state features `feat`, given the step's first-layer part `step`.
+    #[inline(always)]
+    pub fn velocity(&self, step: &[f32; W], feat: [f32; FEATURES]) -> [f32; 2] {
+        let mut h = self.first_layer(step, feat);
+        silu_layer(&mut h);
+        for layer in &self.mid {
+            h = layer.forward(&h);
+            silu_layer(&mut h);
+        }
+        self.out.forward(&h)
+    }
+
+    /// `v` and `dv/dx`, where `dfeat[j]` is the derivative of the features along `x_j`.
+    #[inline(always)]
+    pub fn velocity_jacobian(
+        &self,
+        step: &[f32; W],
+        feat: [f32; FEATURES],
+        dfeat: [[f32; FEATURES]; 2],
+    ) -> ([f32; 2], Jacobian) {
+        let mut h = self.first_layer(step, feat);
+        let mut dh = [[0.0; W]; 2];
+        for (dz, df) in dh.iter_mut().zip(&dfeat) {
+            for (col, &d) in self.wx.iter().zip(df) {
+                for (o, &w) in dz.iter_mut().zip(col) {
+                    *o += w * d;
+                }
+            }
+        }
+        silu_layer_tangents(&mut h, &mut dh);
+        for layer in &self.mid {
+            let (z, dz) = layer.forward_tangents(&h, &dh);
+            h = z;
+            dh = dz;
+            silu_layer_tangents(&mut h, &mut dh);
+        }
+        let v = self.out.forward(&h);
+        let d0 = self.out.tangent(&dh[0]);
+        let d1 = self.out.tangent(&dh[1]);
+        (v, [[d0[0], d1[0]], [d0[1], d1[1]]])
+    }
+
+    /// Every parameter in blob order. The first layer is stored row by row over the
+    /// inputs `[features (feature_count), t, encoding]`, then its bias.
+    pub(crate) fn visit_mut(&mut self, feature_count: usize, f: &mut impl FnMut(&mut f32)) {
+        for o in 0..W {
+            for col in self.wx.iter_mut().take(feature_count) {
+                f(&mut col[o]);
+            }
+            f(&mut self.wt[o]);
+            for col in self.wc.w.iter_mut() {
+                f(&mut col[o]);
+            }
+        }
+        self.wc.b.iter_mut().for_each(&mut *f);
+        for layer in self.mid.iter_mut() {
+            layer.visit_mut(f);
+        }
+        self.out.visit_mut(f);
+    }
+}

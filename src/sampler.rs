@@ -1,0 +1,124 @@
+//! The sampling API. Each entry point computes only what it returns:
+//!
+//! | call | work |
+//! |---|---|
+//! | [`Model::sample_direction`] | base net, `N` velocity evaluations |
+//! | [`Model::sample`] | + forward Jacobians and `N` determinants |
+//! | [`Model::pdf`] | `N` Newton inversions (about 4 Jacobian evaluations each) |
+//!
+//! The `_steps` variants take the number of Euler steps per call; the plain ones use the
+//! model's default. Densities are per unit solid angle. Invalid input, or a sample that
+//! leaves the domain, gives `None` (or a PDF of 0): the lost mass is never renormalised.
+
+use crate::def::Domain;
+use crate::input::{uniform_pair, unit_direction};
+use crate::math::exp;
+use crate::model::Model;
+use glam::{Vec2, Vec3};
+
+/// A sampled direction and the density it was sampled with (per unit solid angle).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Sample {
+    pub wo: Vec3,
+    pub pdf: f32,
+}
+
+impl Sample {
+    /// What batch calls write for an invalid sample: `wo = 0`, `pdf = 0`.
+    pub const INVALID: Sample = Sample {
+        wo: Vec3::ZERO,
+        pdf: 0.0,
+    };
+
+    /// Whether this is a real sample (`pdf > 0`).
+    pub fn is_valid(&self) -> bool {
+        self.pdf > 0.0
+    }
+}
+
+impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
+    Model<BE, BW, BM, VE, VW, VM>
+{
+    /// The model's default number of Euler steps.
+    pub fn default_steps(&self) -> u32 {
+        self.def.default_steps as u32
+    }
+
+    /// A direction for `wi` and `u in [0,1]^2`, without its PDF.
+    #[inline]
+    pub fn sample_direction(&self, wi: Vec3, u: Vec2) -> Option<Vec3> {
+        self.sample_direction_steps(wi, u, self.default_steps())
+    }
+
+    /// A direction and its PDF.
+    #[inline]
+    pub fn sample(&self, wi: Vec3, u: Vec2) -> Option<Sample> {
+        self.sample_steps(wi, u, self.default_steps())
+    }
+
+    /// The PDF (per unit solid angle) with which `sample` produces `wo` for `wi`.
+    #[inline]
+    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        self.pdf_steps(wi, wo, self.default_steps())
+    }
+
+    /// [`Model::sample_direction`] with `steps` Euler steps (`steps >= 1`).
+    #[inline]
+    pub fn sample_direction_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Vec3> {
+        let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
+        if steps == 0 {
+            return None;
+        }
+        let c = self.condition(wi);
+        let x = self.flow(&c, c.base.sample(u), steps);
+        self.def.domain.to_direction(x).filter(|wo| wo.is_finite())
+    }
+
+    /// [`Model::sample`] with `steps` Euler steps (`steps >= 1`).
+    #[inline]
+    pub fn sample_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Sample> {
+        let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
+        if steps == 0 {
+            return None;
+        }
+        let c = self.condition(wi);
+        let x0 = c.base.sample(u);
+        let (x, ln_det) = self.flow_with_ln_det(&c, x0, steps)?;
+        let wo = self.def.domain.to_direction(x)?;
+        // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (DESIGN.md, "The math")
+        let ln_pdf = c.base.ln_pdf(x0) - ln_det + self.def.domain.ln_measure(x, wo);
+        let pdf = exp(ln_pdf);
+        (wo.is_finite() && pdf.is_finite() && pdf > 0.0).then_some(Sample { wo, pdf })
+    }
+
+    /// [`Model::pdf`] with `steps` Euler steps (`steps >= 1`); 0 for invalid input.
+    #[inline]
+    pub fn pdf_steps(&self, wi: Vec3, wo: Vec3, steps: u32) -> f32 {
+        self.pdf_inner(wi, wo, steps).unwrap_or(0.0)
+    }
+
+    fn pdf_inner(&self, wi: Vec3, wo: Vec3, steps: u32) -> Option<f32> {
+        let (wi, wo) = (self.incident(wi)?, unit_direction(wo)?);
+        if steps == 0 {
+            return None;
+        }
+        let domain = self.def.domain;
+        let y = domain.from_direction(wo)?;
+        let c = self.condition(wi);
+        let (x0, ln_det) = self.flow_inverse(&c, y, steps)?;
+        let ln_pdf = c.base.ln_pdf(x0) - ln_det + domain.ln_measure(y, wo);
+        let pdf = exp(ln_pdf);
+        pdf.is_finite().then_some(pdf)
+    }
+
+    /// `wi` normalised, or `None` if invalid; disk models (BRDFs) take `wi.z >= 0` only.
+    #[inline]
+    fn incident(&self, wi: Vec3) -> Option<Vec3> {
+        let wi = unit_direction(wi)?;
+        match self.def.domain {
+            Domain::Disk if wi.z < 0.0 => None,
+            _ => Some(wi),
+        }
+    }
+}

@@ -1,0 +1,83 @@
+//! The PDF integrates to one: quadrature of `pdf_x` over the domain plus the measured
+//! mass that leaves the domain equals 1 within 1e-3.
+
+mod support;
+
+use diffbsdf::glam::{Vec2, Vec3};
+use std::f32::consts::{PI, TAU};
+use support::{direction, random_disk, random_sphere};
+
+/// Allowed error of `integral + lost mass` against 1.
+const NORMALIZATION_TOL: f64 = 1e-3;
+/// Stratified `u` grid (per axis) for the lost-mass fraction.
+const U_GRID: usize = 1000;
+
+/// Fraction of a stratified `u` grid whose sample leaves the domain.
+fn lost_mass(valid: impl Fn(Vec2) -> bool) -> f64 {
+    let mut lost = 0usize;
+    for i in 0..U_GRID {
+        for j in 0..U_GRID {
+            let u = Vec2::new((i as f32 + 0.5) / U_GRID as f32, (j as f32 + 0.5) / U_GRID as f32);
+            lost += usize::from(!valid(u));
+        }
+    }
+    lost as f64 / (U_GRID * U_GRID) as f64
+}
+
+/// Midpoint quadrature of `pdf_x = pdf_w / cos(theta)` over the disk in polar coordinates.
+fn disk_integral(pdf: impl Fn(Vec3) -> f32) -> f64 {
+    let (nr, nphi) = (400, 800);
+    let mut sum = 0.0f64;
+    for i in 0..nr {
+        let r = (i as f32 + 0.5) / nr as f32;
+        for j in 0..nphi {
+            let phi = (j as f32 + 0.5) / nphi as f32 * TAU;
+            let wo = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - r * r).sqrt());
+            sum += (pdf(wo) / wo.z) as f64 * r as f64;
+        }
+    }
+    sum * (1.0 / nr as f64) * (std::f64::consts::TAU / nphi as f64)
+}
+
+/// Midpoint quadrature of `pdf_x = pdf_w sin(theta)` over (theta, phi).
+fn sphere_integral(pdf: impl Fn(Vec3) -> f32) -> f64 {
+    let (nt, nphi) = (500, 800);
+    let mut sum = 0.0f64;
+    for i in 0..nt {
+        let theta = (i as f32 + 0.5) / nt as f32 * PI;
+        for j in 0..nphi {
+            let phi = (j as f32 + 0.5) / nphi as f32 * TAU - PI;
+            let wo = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            sum += (pdf(wo) * theta.sin()) as f64;
+        }
+    }
+    sum * (std::f64::consts::PI / nt as f64) * (std::f64::consts::TAU / nphi as f64)
+}
+
+#[test]
+fn disk_pdf_integrates_to_one_minus_lost_mass() {
+    for (seed, steps, a, b) in [(1u64, 4u32, 0.2f32, 0.1f32), (2, 2, 0.9, 0.5), (3, 8, 0.02, 0.8)] {
+        let m = random_disk(seed, 2);
+        let wi = direction(a, b, true);
+        let integral = disk_integral(|wo| m.pdf_steps(wi, wo, steps));
+        let lost = lost_mass(|u| m.sample_direction_steps(wi, u, steps).is_some());
+        let total = integral + lost;
+        println!("disk seed {seed}: integral {integral:.6} + lost {lost:.6} = {total:.6}");
+        assert!((total - 1.0).abs() <= NORMALIZATION_TOL, "disk seed {seed}: {integral} + {lost} = {total}");
+        assert!(integral > 0.2, "the test model must keep a good part of its mass in the domain");
+    }
+}
+
+#[test]
+fn sphere_pdf_integrates_to_one_minus_lost_mass() {
+    for (seed, steps, a, b) in [(11u64, 8u32, 0.3f32, 0.1f32), (12, 4, 0.7, 0.5), (13, 2, 0.01, 0.9)] {
+        let m = random_sphere(seed, 2);
+        let wi = direction(a, b, false);
+        let integral = sphere_integral(|wo| m.pdf_steps(wi, wo, steps));
+        let lost = lost_mass(|u| m.sample_direction_steps(wi, u, steps).is_some());
+        let total = integral + lost;
+        println!("sphere seed {seed}: integral {integral:.6} + lost {lost:.6} = {total:.6}");
+        assert!((total - 1.0).abs() <= NORMALIZATION_TOL, "sphere seed {seed}: {integral} + {lost} = {total}");
+        assert!(integral > 0.2, "the test model must keep a good part of its mass in the domain");
+    }
+}

@@ -1,0 +1,1 @@
+//! The `diffbsdf` command line.
