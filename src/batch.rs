@@ -29,8 +29,14 @@ fn same_len(a: usize, b: usize, c: usize) -> Result<(), BatchError> {
     }
 }
 
-impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
-    Model<BE, BW, BM, VE, VW, VM>
+impl<
+        const BE: usize,
+        const BW: usize,
+        const BM: usize,
+        const VE: usize,
+        const VW: usize,
+        const VM: usize,
+    > Model<BE, BW, BM, VE, VW, VM>
 {
     /// `out[i] = sample_direction_steps(wi[i], u[i], steps)`, `Vec3::ZERO` if invalid.
     pub fn sample_direction_batch(
@@ -42,7 +48,9 @@ impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const V
     ) -> Result<(), BatchError> {
         same_len(wi.len(), u.len(), out.len())?;
         for ((o, &w), &r) in out.iter_mut().zip(wi).zip(u) {
-            *o = self.sample_direction_steps(w, r, steps).unwrap_or(Vec3::ZERO);
+            *o = self
+                .sample_direction_steps(w, r, steps)
+                .unwrap_or(Vec3::ZERO);
         }
         Ok(())
     }

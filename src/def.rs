@@ -219,7 +219,12 @@ impl ModelDef {
     pub const fn param_count(&self) -> usize {
         let bw = self.base.width as usize;
         let vw = self.velocity.width as usize;
-        let base = mlp_params(self.base.encoding_len(), bw, self.base.hidden_layers, BASE_OUTPUTS);
+        let base = mlp_params(
+            self.base.encoding_len(),
+            bw,
+            self.base.hidden_layers,
+            BASE_OUTPUTS,
+        );
         let vel = mlp_params(self.velocity_inputs(), vw, self.velocity.hidden_layers, 2);
         base + vel
     }
@@ -229,7 +234,11 @@ impl ModelDef {
 const fn mlp_params(inputs: usize, width: usize, hidden: u8, outputs: usize) -> usize {
     let hidden = hidden as usize;
     let first = inputs * width + width;
-    let mid = if hidden > 0 { (hidden - 1) * (width * width + width) } else { 0 };
+    let mid = if hidden > 0 {
+        (hidden - 1) * (width * width + width)
+    } else {
+        0
+    };
     let last = width * outputs + outputs;
     first + mid + last
 }

@@ -9,8 +9,14 @@ use crate::model::Model;
 use crate::net::Jacobian;
 use glam::{Vec2, Vec3};
 
-impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
-    Model<BE, BW, BM, VE, VW, VM>
+impl<
+        const BE: usize,
+        const BW: usize,
+        const BM: usize,
+        const VE: usize,
+        const VW: usize,
+        const VM: usize,
+    > Model<BE, BW, BM, VE, VW, VM>
 {
     /// `v(x, t, wi)` and the hand-derived `dv/dx` at a flow point `x`.
     pub fn velocity_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<([f32; 2], Jacobian)> {
@@ -34,7 +40,13 @@ impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const V
 
     /// Writes `x_0 .. x_steps` into `points` (which must hold `steps + 1` points) and
     /// returns the smallest step determinant `det(I + h dv/dx)` along the way.
-    pub fn trajectory(&self, wi: Vec3, u: Vec2, steps: u32, points: &mut [[f32; 2]]) -> Option<f32> {
+    pub fn trajectory(
+        &self,
+        wi: Vec3,
+        u: Vec2,
+        steps: u32,
+        points: &mut [[f32; 2]],
+    ) -> Option<f32> {
         let c = self.condition(unit_direction(wi)?);
         let points = points.get_mut(..steps as usize + 1)?;
         let domain = self.def.domain;

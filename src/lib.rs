@@ -30,12 +30,15 @@
 #![no_std]
 #![deny(unsafe_code)]
 #![warn(missing_debug_implementations)]
+// `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values; the
+// "clearer" `x <= 0.0` would let NaN through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod base;
 mod batch;
-mod diagnostics;
 pub mod blob;
 pub mod def;
+mod diagnostics;
 pub mod domain;
 mod flow;
 pub mod input;

@@ -77,6 +77,10 @@ pub fn exp_poly(x: f32) -> f32 {
     let p = p * r + 0.5;
     let p = p * r + 1.0;
     let p = p * r + 1.0;
-    let scale = f32::from_bits(((n as i32 + 127) as u32) << 23);
+    // 2^n without a float-to-int cast (which is saturating and does not vectorise): the
+    // low mantissa bits of 2^23 + (n + 127) hold the biased exponent n + 127, and the shift
+    // moves them into the exponent field (the bits of 2^23 fall off the top).
+    let biased = n + (127.0 + 8_388_608.0);
+    let scale = f32::from_bits(biased.to_bits() << 23);
     p * scale
 }

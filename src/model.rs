@@ -30,8 +30,14 @@ pub type Model3x32 = Model<21, 16, 0, 33, 32, 2>;
 /// Base 1x16 (3 frequencies), velocity 4x32 (5 frequencies): the paper's sphere model.
 pub type Model4x32 = Model<21, 16, 0, 33, 32, 3>;
 
-impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
-    Model<BE, BW, BM, VE, VW, VM>
+impl<
+        const BE: usize,
+        const BW: usize,
+        const BM: usize,
+        const VE: usize,
+        const VW: usize,
+        const VM: usize,
+    > Model<BE, BW, BM, VE, VW, VM>
 {
     /// Whether a model of definition `def` has this type's compiled shape.
     pub const fn accepts(def: &ModelDef) -> bool {
@@ -106,10 +112,9 @@ impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const V
     pub fn params(&self, out: &mut [f32]) -> Result<usize, BlobError> {
         let n = self.def.param_count();
         let got = out.len() * 4;
-        let out = out.get_mut(..n).ok_or(BlobError::BufferTooSmall {
-            needed: n * 4,
-            got,
-        })?;
+        let out = out
+            .get_mut(..n)
+            .ok_or(BlobError::BufferTooSmall { needed: n * 4, got })?;
         let mut copy = *self;
         let mut it = out.iter_mut();
         copy.visit_params_mut(|p| {

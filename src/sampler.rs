@@ -37,8 +37,14 @@ impl Sample {
     }
 }
 
-impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
-    Model<BE, BW, BM, VE, VW, VM>
+impl<
+        const BE: usize,
+        const BW: usize,
+        const BM: usize,
+        const VE: usize,
+        const VW: usize,
+        const VM: usize,
+    > Model<BE, BW, BM, VE, VW, VM>
 {
     /// The model's default number of Euler steps.
     pub fn default_steps(&self) -> u32 {
@@ -104,7 +110,7 @@ impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const V
             return None;
         }
         let domain = self.def.domain;
-        let y = domain.from_direction(wo)?;
+        let y = domain.point_of(wo)?;
         let c = self.condition(wi);
         let (x0, ln_det) = self.flow_inverse(&c, y, steps)?;
         let ln_pdf = c.base.ln_pdf(x0) - ln_det + domain.ln_measure(y, wo);

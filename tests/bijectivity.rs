@@ -15,14 +15,26 @@ fn wrapped(d: f32) -> f32 {
     d - tau * ((d + std::f32::consts::PI) / tau).floor()
 }
 
-fn check(points: &[[f32; 2]], min_det: f32, back: Option<[f32; 2]>, sphere: bool) -> Result<(), TestCaseError> {
+fn check(
+    points: &[[f32; 2]],
+    min_det: f32,
+    back: Option<[f32; 2]>,
+    sphere: bool,
+) -> Result<(), TestCaseError> {
     prop_assert!(min_det > 0.0, "det {min_det} <= 0 along {points:?}");
     let x0 = points[0];
     let back = back.ok_or_else(|| TestCaseError::fail(format!("inverse failed for {points:?}")))?;
-    let d1 = if sphere { wrapped(back[1] - x0[1]) } else { back[1] - x0[1] };
+    let d1 = if sphere {
+        wrapped(back[1] - x0[1])
+    } else {
+        back[1] - x0[1]
+    };
     let err = (back[0] - x0[0]).abs().max(d1.abs());
     let scale = 1f32.max(x0[0].abs()).max(x0[1].abs());
-    prop_assert!(err <= INVERSE_TOL * scale, "x0 {x0:?} came back as {back:?} (error {err})");
+    prop_assert!(
+        err <= INVERSE_TOL * scale,
+        "x0 {x0:?} came back as {back:?} (error {err})"
+    );
     Ok(())
 }
 

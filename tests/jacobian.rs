@@ -22,7 +22,12 @@ fn finite_difference(v: &Velocity<'_>, x: [f32; 2]) -> [[f32; 2]; 2] {
             p[c] += s;
             v(p)
         };
-        let (p1, m1, p2, m2) = (at(FD_STEP), at(-FD_STEP), at(2.0 * FD_STEP), at(-2.0 * FD_STEP));
+        let (p1, m1, p2, m2) = (
+            at(FD_STEP),
+            at(-FD_STEP),
+            at(2.0 * FD_STEP),
+            at(-2.0 * FD_STEP),
+        );
         for r in 0..2 {
             j[r][c] = (8.0 * (p1[r] - m1[r]) - (p2[r] - m2[r])) / (12.0 * FD_STEP);
         }
@@ -32,7 +37,9 @@ fn finite_difference(v: &Velocity<'_>, x: [f32; 2]) -> [[f32; 2]; 2] {
 
 fn check(hand: [[f32; 2]; 2], fd: [[f32; 2]; 2]) -> Result<(), TestCaseError> {
     let scale = hand.iter().flatten().fold(1e-2f32, |m, v| m.max(v.abs()));
-    let err = (0..4).fold(0.0f32, |m, i| m.max((hand[i / 2][i % 2] - fd[i / 2][i % 2]).abs()));
+    let err = (0..4).fold(0.0f32, |m, i| {
+        m.max((hand[i / 2][i % 2] - fd[i / 2][i % 2]).abs())
+    });
     prop_assert!(
         err <= JACOBIAN_TOL * scale,
         "hand {hand:?} vs finite differences {fd:?}: error {err}, allowed {}",
@@ -70,13 +77,23 @@ proptest! {
     }
 }
 
+/// The velocity-only and the velocity-with-Jacobian paths compute the same `v` up to the
+/// rounding of fused multiply-adds, which the compiler may place differently in each.
+const PATH_TOL: f32 = 1e-6;
+
 #[test]
-fn jacobian_and_velocity_paths_agree_bit_for_bit() {
-    let m = random_disk(7, 0);
-    let wi = direction(0.3, 0.6, true);
-    for k in 0..100 {
-        let x = [k as f32 * 0.017 - 0.8, 0.5 - k as f32 * 0.009];
-        let (v, _) = m.velocity_at(wi, x, 0.25).unwrap();
-        assert_eq!(v, m.velocity_only_at(wi, x, 0.25).unwrap());
+fn jacobian_and_velocity_paths_agree() {
+    for seed in 0..8 {
+        let m = random_disk(seed, 0);
+        let wi = direction(0.3, 0.6, true);
+        for k in 0..100 {
+            let x = [k as f32 * 0.017 - 0.8, 0.5 - k as f32 * 0.009];
+            let (v, _) = m.velocity_at(wi, x, 0.25).unwrap();
+            let w = m.velocity_only_at(wi, x, 0.25).unwrap();
+            let scale = v[0].abs().max(v[1].abs()).max(1.0);
+            for c in 0..2 {
+                assert!((v[c] - w[c]).abs() <= PATH_TOL * scale, "{v:?} vs {w:?}");
+            }
+        }
     }
 }

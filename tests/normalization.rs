@@ -17,7 +17,10 @@ fn lost_mass(valid: impl Fn(Vec2) -> bool) -> f64 {
     let mut lost = 0usize;
     for i in 0..U_GRID {
         for j in 0..U_GRID {
-            let u = Vec2::new((i as f32 + 0.5) / U_GRID as f32, (j as f32 + 0.5) / U_GRID as f32);
+            let u = Vec2::new(
+                (i as f32 + 0.5) / U_GRID as f32,
+                (j as f32 + 0.5) / U_GRID as f32,
+            );
             lost += usize::from(!valid(u));
         }
     }
@@ -47,7 +50,11 @@ fn sphere_integral(pdf: impl Fn(Vec3) -> f32) -> f64 {
         let theta = (i as f32 + 0.5) / nt as f32 * PI;
         for j in 0..nphi {
             let phi = (j as f32 + 0.5) / nphi as f32 * TAU - PI;
-            let wo = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            let wo = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
             sum += (pdf(wo) * theta.sin()) as f64;
         }
     }
@@ -56,28 +63,48 @@ fn sphere_integral(pdf: impl Fn(Vec3) -> f32) -> f64 {
 
 #[test]
 fn disk_pdf_integrates_to_one_minus_lost_mass() {
-    for (seed, steps, a, b) in [(1u64, 4u32, 0.2f32, 0.1f32), (2, 2, 0.9, 0.5), (3, 8, 0.02, 0.8)] {
+    for (seed, steps, a, b) in [
+        (1u64, 4u32, 0.2f32, 0.1f32),
+        (2, 2, 0.9, 0.5),
+        (3, 8, 0.02, 0.8),
+    ] {
         let m = random_disk(seed, 2);
         let wi = direction(a, b, true);
         let integral = disk_integral(|wo| m.pdf_steps(wi, wo, steps));
         let lost = lost_mass(|u| m.sample_direction_steps(wi, u, steps).is_some());
         let total = integral + lost;
         println!("disk seed {seed}: integral {integral:.6} + lost {lost:.6} = {total:.6}");
-        assert!((total - 1.0).abs() <= NORMALIZATION_TOL, "disk seed {seed}: {integral} + {lost} = {total}");
-        assert!(integral > 0.2, "the test model must keep a good part of its mass in the domain");
+        assert!(
+            (total - 1.0).abs() <= NORMALIZATION_TOL,
+            "disk seed {seed}: {integral} + {lost} = {total}"
+        );
+        assert!(
+            integral > 0.2,
+            "the test model must keep a good part of its mass in the domain"
+        );
     }
 }
 
 #[test]
 fn sphere_pdf_integrates_to_one_minus_lost_mass() {
-    for (seed, steps, a, b) in [(11u64, 8u32, 0.3f32, 0.1f32), (12, 4, 0.7, 0.5), (13, 2, 0.01, 0.9)] {
+    for (seed, steps, a, b) in [
+        (11u64, 8u32, 0.3f32, 0.1f32),
+        (12, 4, 0.7, 0.5),
+        (13, 2, 0.01, 0.9),
+    ] {
         let m = random_sphere(seed, 2);
         let wi = direction(a, b, false);
         let integral = sphere_integral(|wo| m.pdf_steps(wi, wo, steps));
         let lost = lost_mass(|u| m.sample_direction_steps(wi, u, steps).is_some());
         let total = integral + lost;
         println!("sphere seed {seed}: integral {integral:.6} + lost {lost:.6} = {total:.6}");
-        assert!((total - 1.0).abs() <= NORMALIZATION_TOL, "sphere seed {seed}: {integral} + {lost} = {total}");
-        assert!(integral > 0.2, "the test model must keep a good part of its mass in the domain");
+        assert!(
+            (total - 1.0).abs() <= NORMALIZATION_TOL,
+            "sphere seed {seed}: {integral} + {lost} = {total}"
+        );
+        assert!(
+            integral > 0.2,
+            "the test model must keep a good part of its mass in the domain"
+        );
     }
 }

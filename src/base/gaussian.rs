@@ -4,7 +4,9 @@ use crate::math::{ln, sqrt};
 
 /// Smallest tail probability the quantile is evaluated at: `u` closer than this to 0 or 1
 /// maps to `|z| = 7.1`. Keeps `u = 0` finite; the mass beyond (1.8e-12 per tail) is never
-/// sampled, which is far below any measurable bias.
+/// sampled. The approximation's tail probability is within 2e-5 (relative) of `u` down to
+/// tails of 2e-8, and within 10 % below that (measured in `tests/base_distributions.rs`):
+/// the sampled density departs from the reported one on at most 4e-8 of the mass.
 pub const TAIL_MIN: f32 = 9.094_947e-13; // 2^-40
 
 /// `ln(1/sqrt(2 pi))`.
@@ -41,7 +43,7 @@ pub fn quantile(u: f32) -> f32 {
         let p = 5.739_507_7e-3 + p * w;
         let p = -7.622_461_3e-3 + p * w;
         let p = 9.438_870_5e-3 + p * w;
-        let p = 1.001_674_1 + p * w;
+        let p = 1.001_674 + p * w;
         2.832_976_8 + p * w
     };
     let z = core::f32::consts::SQRT_2 * p * x;

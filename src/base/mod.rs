@@ -16,7 +16,7 @@ use crate::math::exp;
 /// Sharpest scale a base distribution may have: `sigma = gamma = 1e-4`.
 pub const LN_SCALE_MIN: f32 = -9.210_34;
 /// Widest scale: `sigma = gamma = 10`.
-pub const LN_SCALE_MAX: f32 = 2.302_585;
+pub const LN_SCALE_MAX: f32 = core::f32::consts::LN_10;
 
 /// `p0(x0 | wi)` for one `wi`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -44,7 +44,10 @@ impl fmt::Display for BlobError {
                 write!(f, "blob truncated: needs {needed} bytes, got {got}")
             }
             BlobError::TrailingBytes { expected, got } => {
-                write!(f, "blob has trailing bytes: expected {expected} bytes, got {got}")
+                write!(
+                    f,
+                    "blob has trailing bytes: expected {expected} bytes, got {got}"
+                )
             }
             BlobError::ChecksumMismatch { stored, computed } => write!(
                 f,
@@ -66,7 +69,10 @@ impl fmt::Display for BlobError {
                 write!(f, "blob shape differs from the compiled model shape")
             }
             BlobError::BufferTooSmall { needed, got } => {
-                write!(f, "output buffer too small: needs {needed} bytes, got {got}")
+                write!(
+                    f,
+                    "output buffer too small: needs {needed} bytes, got {got}"
+                )
             }
         }
     }

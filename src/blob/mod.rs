@@ -49,8 +49,8 @@ impl<'a> Blob<'a> {
             return Err(BlobError::UnsupportedVersion(version));
         }
         let raw = RawHeader::read(&mut cur).ok_or(truncated)?;
-        let precision =
-            Precision::from_code(raw.precision).ok_or(BlobError::UnknownPrecision(raw.precision))?;
+        let precision = Precision::from_code(raw.precision)
+            .ok_or(BlobError::UnknownPrecision(raw.precision))?;
         let total = (raw.param_count as usize)
             .checked_mul(precision.bytes())
             .and_then(|w| w.checked_add(HEADER_LEN + CHECKSUM_LEN))
@@ -161,7 +161,8 @@ impl RawHeader {
             .name
             .get(..self.name_len as usize)
             .ok_or(BlobError::BadHeader("name longer than 32 bytes"))?;
-        let name = ModelName::from_bytes(name_bytes).ok_or(BlobError::BadHeader("name is not UTF-8"))?;
+        let name =
+            ModelName::from_bytes(name_bytes).ok_or(BlobError::BadHeader("name is not UTF-8"))?;
         let def = ModelDef {
             domain,
             precision,

@@ -72,7 +72,7 @@ impl Domain {
 
     /// The flow point of a unit direction; `None` where the domain has no density.
     #[inline]
-    pub(crate) fn from_direction(self, wo: Vec3) -> Option<[f32; 2]> {
+    pub(crate) fn point_of(self, wo: Vec3) -> Option<[f32; 2]> {
         match self {
             Domain::Disk => disk::from_direction(wo),
             Domain::Sphere => sphere::from_direction(wo),

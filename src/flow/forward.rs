@@ -4,8 +4,14 @@ use super::{step_det, step_time, Conditioned};
 use crate::math::ln;
 use crate::model::Model;
 
-impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
-    Model<BE, BW, BM, VE, VW, VM>
+impl<
+        const BE: usize,
+        const BW: usize,
+        const BM: usize,
+        const VE: usize,
+        const VW: usize,
+        const VM: usize,
+    > Model<BE, BW, BM, VE, VW, VM>
 {
     /// `x_N` from `x0` (eq. 4 of the paper): no Jacobians.
     #[inline]

@@ -16,8 +16,14 @@ pub const NEWTON_MAX_ITERS: u32 = 16;
 /// `x + h v(x)` sits near 3e-7 of that scale.
 pub const NEWTON_TOL: f32 = 1e-6;
 
-impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
-    Model<BE, BW, BM, VE, VW, VM>
+impl<
+        const BE: usize,
+        const BW: usize,
+        const BM: usize,
+        const VE: usize,
+        const VW: usize,
+        const VM: usize,
+    > Model<BE, BW, BM, VE, VW, VM>
 {
     /// `x0` and `sum_k ln det(I + h dv/dx(x_k))` for the end point `y`; `None` if a step
     /// cannot be inverted (Newton did not converge, or `det <= 0`).
@@ -55,8 +61,16 @@ impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const V
             }
             let r = domain.difference(domain.advance(x, [h * v[0], h * v[1]]), y);
             // d = (I + h J)^-1 r, by the 2x2 adjugate.
-            let (a00, a01, a10, a11) = (1.0 + h * j[0][0], h * j[0][1], h * j[1][0], 1.0 + h * j[1][1]);
-            let d = [(a11 * r[0] - a01 * r[1]) / det, (a00 * r[1] - a10 * r[0]) / det];
+            let (a00, a01, a10, a11) = (
+                1.0 + h * j[0][0],
+                h * j[0][1],
+                h * j[1][0],
+                1.0 + h * j[1][1],
+            );
+            let d = [
+                (a11 * r[0] - a01 * r[1]) / det,
+                (a00 * r[1] - a10 * r[0]) / det,
+            ];
             x = domain.advance(x, [-d[0], -d[1]]);
             let scale = 1.0 + x[0].abs().max(x[1].abs());
             let size = d[0].abs().max(d[1].abs());

@@ -34,8 +34,14 @@ pub(crate) fn step_time(k: u32, h: f32) -> f32 {
     k as f32 * h
 }
 
-impl<const BE: usize, const BW: usize, const BM: usize, const VE: usize, const VW: usize, const VM: usize>
-    Model<BE, BW, BM, VE, VW, VM>
+impl<
+        const BE: usize,
+        const BW: usize,
+        const BM: usize,
+        const VE: usize,
+        const VW: usize,
+        const VM: usize,
+    > Model<BE, BW, BM, VE, VW, VM>
 {
     /// Evaluates the base net and the velocity net's `wi` part, once per call.
     #[inline]

@@ -60,7 +60,7 @@ fn base_layers(def: &ModelDef) -> Vec<(usize, usize)> {
 /// The base net's outputs are biased so that `p0` sits inside the domain with scales in
 /// [`min_scale`, 0.4].
 /// The velocity net is left unscaled here; [`scale_to_invertible`] scales its readout.
-pub fn random_params(def: &ModelDef, rng: &mut Rng, min_steps: u32, min_scale: f32) -> Vec<f32> {
+pub fn random_params(def: &ModelDef, rng: &mut Rng, min_scale: f32) -> Vec<f32> {
     let mut params = Vec::with_capacity(def.param_count());
     // Base net: small weights, biases of the readout set the distribution.
     let layers = base_layers(def);
@@ -71,7 +71,11 @@ pub fn random_params(def: &ModelDef, rng: &mut Rng, min_steps: u32, min_scale: f
             params.push(rng.range(-scale, scale) * 1.7);
         }
         for r in 0..rows {
-            params.push(if last { base_bias(def.domain, r, rng, min_scale) } else { rng.range(-0.1, 0.1) });
+            params.push(if last {
+                base_bias(def.domain, r, rng, min_scale)
+            } else {
+                rng.range(-0.1, 0.1)
+            });
         }
     }
     // Velocity net.
@@ -131,7 +135,11 @@ fn scale_to_invertible(
     }
     let mut probes = Vec::new();
     for k in 0..4 {
-        let wi = direction(0.1 + 0.27 * k as f32, 0.37 * k as f32, def.domain == Domain::Disk);
+        let wi = direction(
+            0.1 + 0.27 * k as f32,
+            0.37 * k as f32,
+            def.domain == Domain::Disk,
+        );
         for i in 0..13 {
             for j in 0..13 {
                 let x = match def.domain {
@@ -145,9 +153,13 @@ fn scale_to_invertible(
         }
     }
     let results = eval_all(params, &probes);
-    let worst = results.iter().fold(0.0f32, |m, (_, j)| m.max(spectral_norm(*j)));
+    let worst = results
+        .iter()
+        .fold(0.0f32, |m, (_, j)| m.max(spectral_norm(*j)));
     let count = results.len() as f32;
-    let mean = results.iter().fold([0.0f32; 2], |m, (v, _)| [m[0] + v[0], m[1] + v[1]]);
+    let mean = results
+        .iter()
+        .fold([0.0f32; 2], |m, (v, _)| [m[0] + v[0], m[1] + v[1]]);
     let s = STEP_STRETCH * min_steps as f32 / worst;
     let w = def.velocity.width as usize;
     let n = params.len();
@@ -162,10 +174,13 @@ fn scale_to_invertible(
 /// (`min_steps = 0`: unscaled, possibly not invertible).
 pub fn random_disk(seed: u64, min_steps: u32) -> Model3x32 {
     let def = ModelDef::paper_disk();
-    let mut params = random_params(&def, &mut Rng::new(seed), min_steps, 0.08);
+    let mut params = random_params(&def, &mut Rng::new(seed), 0.08);
     scale_to_invertible(&def, &mut params, min_steps, |p, probes| {
         let m = Model3x32::from_params(def, p).unwrap();
-        probes.iter().map(|&(wi, x, t)| m.velocity_at(wi, x, t).unwrap()).collect()
+        probes
+            .iter()
+            .map(|&(wi, x, t)| m.velocity_at(wi, x, t).unwrap())
+            .collect()
     });
     Model3x32::from_params(def, &params).unwrap()
 }
@@ -173,10 +188,13 @@ pub fn random_disk(seed: u64, min_steps: u32) -> Model3x32 {
 /// A random sphere model (paper shape 4x32), invertible for `steps >= min_steps`.
 pub fn random_sphere(seed: u64, min_steps: u32) -> Model4x32 {
     let def = ModelDef::paper_sphere();
-    let mut params = random_params(&def, &mut Rng::new(seed), min_steps, 0.08);
+    let mut params = random_params(&def, &mut Rng::new(seed), 0.08);
     scale_to_invertible(&def, &mut params, min_steps, |p, probes| {
         let m = Model4x32::from_params(def, p).unwrap();
-        probes.iter().map(|&(wi, x, t)| m.velocity_at(wi, x, t).unwrap()).collect()
+        probes
+            .iter()
+            .map(|&(wi, x, t)| m.velocity_at(wi, x, t).unwrap())
+            .collect()
     });
     Model4x32::from_params(def, &params).unwrap()
 }

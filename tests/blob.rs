@@ -1,0 +1,241 @@
+//! The weight blob: bit-exact round trips, and malformed bytes give the right error,
+//! never a panic.
+
+mod support;
+
+use diffbsdf::blob::{blob_len, crc32, write_blob, Blob, CHECKSUM_LEN, HEADER_LEN};
+use diffbsdf::{BlobError, Model3x32, Model4x32, ModelName, Precision};
+use proptest::prelude::*;
+use support::{random_disk, random_sphere};
+
+fn blob_of(m: &Model3x32, precision: Precision) -> Vec<u8> {
+    let mut def = *m.def();
+    def.precision = precision;
+    let mut out = vec![0u8; blob_len(&def)];
+    let n = m.write_blob(precision, &mut out).unwrap();
+    assert_eq!(n, out.len());
+    out
+}
+
+fn params_of(m: &Model3x32) -> Vec<f32> {
+    let mut p = vec![0.0; m.def().param_count()];
+    m.params(&mut p).unwrap();
+    p
+}
+
+#[test]
+fn f32_round_trip_is_bit_exact() {
+    let mut m = random_disk(5, 2);
+    m.set_metadata(ModelName::new("cu-ggx-0.3").unwrap(), 4);
+    let bytes = blob_of(&m, Precision::F32);
+    let back = Model3x32::from_blob(&bytes).unwrap();
+    let (a, b) = (params_of(&m), params_of(&back));
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+    assert_eq!(back.def().name.as_str(), "cu-ggx-0.3");
+    assert_eq!(blob_of(&back, Precision::F32), bytes);
+}
+
+#[test]
+fn f16_round_trip_is_bit_exact_after_rounding() {
+    let m = random_disk(6, 2);
+    let bytes = blob_of(&m, Precision::F16);
+    let back = Model3x32::from_blob(&bytes).unwrap();
+    assert_eq!(back.def().precision, Precision::F16);
+    for (w, r) in params_of(&m).iter().zip(params_of(&back)) {
+        assert_eq!(half::f16::from_f32(*w).to_f32().to_bits(), r.to_bits());
+    }
+    assert_eq!(blob_of(&back, Precision::F16), bytes);
+    assert_eq!(
+        bytes.len(),
+        HEADER_LEN + 2 * m.def().param_count() + CHECKSUM_LEN
+    );
+}
+
+#[test]
+fn every_truncation_is_reported_as_truncated() {
+    let bytes = blob_of(&random_disk(7, 2), Precision::F16);
+    for len in 0..bytes.len() {
+        match Model3x32::from_blob(&bytes[..len]) {
+            Err(BlobError::Truncated { got, .. }) => assert_eq!(got, len),
+            other => panic!("length {len}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn trailing_bytes_are_rejected() {
+    let mut bytes = blob_of(&random_disk(7, 2), Precision::F32);
+    bytes.push(0);
+    assert!(matches!(
+        Model3x32::from_blob(&bytes),
+        Err(BlobError::TrailingBytes { .. })
+    ));
+}
+
+/// The error a flipped bit must give, by where it is.
+fn expected_kind(offset: usize, err: &BlobError) -> bool {
+    match offset {
+        0..=7 => matches!(err, BlobError::BadMagic),
+        8..=9 => matches!(err, BlobError::UnsupportedVersion(_)),
+        // precision code: another length, or an unknown code
+        11 => matches!(
+            err,
+            BlobError::UnknownPrecision(_)
+                | BlobError::Truncated { .. }
+                | BlobError::TrailingBytes { .. }
+        ),
+        // parameter count: another length (or an overflow)
+        24..=27 => matches!(
+            err,
+            BlobError::Truncated { .. } | BlobError::TrailingBytes { .. } | BlobError::BadHeader(_)
+        ),
+        _ => matches!(err, BlobError::ChecksumMismatch { .. }),
+    }
+}
+
+#[test]
+fn every_bit_flip_gives_the_error_of_its_region() {
+    for precision in [Precision::F32, Precision::F16] {
+        let bytes = blob_of(&random_disk(8, 2), precision);
+        let mut copy = bytes.clone();
+        for offset in 0..bytes.len() {
+            for bit in 0..8 {
+                copy[offset] ^= 1 << bit;
+                let err = Model3x32::from_blob(&copy).expect_err("a flipped bit was accepted");
+                assert!(
+                    expected_kind(offset, &err),
+                    "bit {bit} of byte {offset}: {err:?}"
+                );
+                copy[offset] ^= 1 << bit;
+            }
+        }
+    }
+}
+
+/// Rewrites the checksum after editing a blob, to reach the checks behind it.
+fn reseal(bytes: &mut [u8]) {
+    let n = bytes.len() - CHECKSUM_LEN;
+    let crc = crc32(&bytes[..n]);
+    bytes[n..].copy_from_slice(&crc.to_le_bytes());
+}
+
+#[test]
+fn header_errors_behind_a_valid_checksum() {
+    let good = blob_of(&random_disk(9, 2), Precision::F32);
+    let case = |offset: usize, value: u8| {
+        let mut b = good.clone();
+        b[offset] = value;
+        reseal(&mut b);
+        Model3x32::from_blob(&b).unwrap_err()
+    };
+    assert_eq!(case(10, 7), BlobError::UnknownDomain(7));
+    assert_eq!(case(12, 3), BlobError::UnknownActivation(3));
+    assert!(matches!(
+        case(14, 0),
+        BlobError::BadHeader(_) | BlobError::ParamCountMismatch { .. }
+    ));
+    assert!(matches!(case(16, 0), BlobError::BadHeader(_)));
+    assert!(matches!(case(21, 33), BlobError::BadHeader(_)));
+    assert!(matches!(case(28, 1), BlobError::BadHeader(_)));
+    assert!(matches!(case(13, 9), BlobError::BadHeader(_)));
+    // A sphere blob has the disk's shape but another domain: the feature count changes
+    // the parameter count.
+    assert!(matches!(case(10, 1), BlobError::ParamCountMismatch { .. }));
+}
+
+#[test]
+fn non_finite_weights_are_rejected_even_with_a_valid_checksum() {
+    let mut b = blob_of(&random_disk(10, 2), Precision::F32);
+    b[HEADER_LEN + 4 * 17..HEADER_LEN + 4 * 18].copy_from_slice(&f32::NAN.to_le_bytes());
+    reseal(&mut b);
+    assert_eq!(
+        Model3x32::from_blob(&b).unwrap_err(),
+        BlobError::NonFiniteWeight { index: 17 }
+    );
+    let mut h = blob_of(&random_disk(10, 2), Precision::F16);
+    h[HEADER_LEN + 2 * 5..HEADER_LEN + 2 * 6]
+        .copy_from_slice(&half::f16::INFINITY.to_bits().to_le_bytes());
+    reseal(&mut h);
+    assert_eq!(
+        Model3x32::from_blob(&h).unwrap_err(),
+        BlobError::NonFiniteWeight { index: 5 }
+    );
+}
+
+#[test]
+fn a_blob_of_another_shape_is_a_shape_mismatch_and_load_into_keeps_the_model() {
+    let sphere = random_sphere(11, 2);
+    let mut def = *sphere.def();
+    def.precision = Precision::F32;
+    let mut bytes = vec![0u8; blob_len(&def)];
+    sphere.write_blob(Precision::F32, &mut bytes).unwrap();
+    assert!(Blob::parse(&bytes).is_ok());
+    assert_eq!(
+        Model3x32::from_blob(&bytes).unwrap_err(),
+        BlobError::ShapeMismatch
+    );
+    assert!(Model4x32::from_blob(&bytes).is_ok());
+    let mut disk = random_disk(12, 2);
+    let before = disk;
+    assert_eq!(
+        disk.load_into(&bytes).unwrap_err(),
+        BlobError::ShapeMismatch
+    );
+    assert_eq!(disk, before);
+    let mut corrupt = blob_of(&random_disk(13, 2), Precision::F32);
+    corrupt[100] ^= 1;
+    assert!(disk.load_into(&corrupt).is_err());
+    assert_eq!(disk, before);
+}
+
+#[test]
+fn writer_rejects_bad_input() {
+    let m = random_disk(14, 2);
+    let def = *m.def();
+    let params = params_of(&m);
+    let mut small = vec![0u8; 10];
+    assert!(matches!(
+        write_blob(&def, &params, &mut small),
+        Err(BlobError::BufferTooSmall { .. })
+    ));
+    let mut out = vec![0u8; blob_len(&def)];
+    assert!(matches!(
+        write_blob(&def, &params[1..], &mut out),
+        Err(BlobError::ParamCountMismatch { .. })
+    ));
+    let mut bad = params.clone();
+    bad[3] = f32::INFINITY;
+    assert_eq!(
+        write_blob(&def, &bad, &mut out),
+        Err(BlobError::NonFiniteWeight { index: 3 })
+    );
+    let mut big = params;
+    big[4] = 1e6;
+    let mut d16 = def;
+    d16.precision = Precision::F16;
+    let mut out16 = vec![0u8; blob_len(&d16)];
+    assert_eq!(
+        write_blob(&d16, &big, &mut out16),
+        Err(BlobError::NonFiniteWeight { index: 4 })
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    #[test]
+    fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..4096)) {
+        prop_assert!(Model3x32::from_blob(&bytes).is_err());
+        prop_assert!(Model4x32::from_blob(&bytes).is_err());
+    }
+
+    #[test]
+    fn random_bytes_after_a_valid_header_never_panic(
+        tail in proptest::collection::vec(any::<u8>(), 0..8192), cut in 0usize..64,
+    ) {
+        let good = blob_of(&random_disk(15, 2), Precision::F16);
+        let mut b = good[..HEADER_LEN - cut].to_vec();
+        b.extend_from_slice(&tail);
+        prop_assert!(Model3x32::from_blob(&b).is_err());
+    }
+}
