@@ -10,8 +10,10 @@ use super::{step_det, step_time, Conditioned};
 use crate::math::ln;
 use crate::model::Model;
 
-/// Newton iterations before a step is declared not invertible.
-pub const NEWTON_MAX_ITERS: u32 = 16;
+/// Newton iterations before a step is declared not invertible (typically 2 to 4 are used).
+pub const NEWTON_MAX_ITERS: u32 = 32;
+/// Halvings of a Newton step's length before it is taken anyway.
+const LINE_SEARCH_HALVINGS: u32 = 8;
 /// Newton stops when the update is below `NEWTON_TOL * (1 + |x|)` (max norm); f32 noise in
 /// `x + h v(x)` sits near 3e-7 of that scale.
 pub const NEWTON_TOL: f32 = 1e-6;
@@ -47,40 +49,104 @@ impl<
     }
 
     /// Solves `x + h v(x) = y` for one step; returns `x` and `det(I + h dv/dx(x))`.
+    ///
+    /// Newton steps where `I + h dv/dx` is orientation preserving, fixed-point steps
+    /// `x <- y - h v(x)` where it is not, each with a backtracking line search on the
+    /// residual (halving the step until the residual shrinks), which breaks the two-cycles
+    /// plain Newton can fall into on strongly curved velocity fields.
     #[inline]
     fn invert_step(&self, step: &[f32; VW], y: [f32; 2], h: f32) -> Option<([f32; 2], f32)> {
         let domain = self.def.domain;
         let v = self.velocity.velocity(step, domain.features(y));
-        let mut x = domain.advance(y, [-h * v[0], -h * v[1]]);
+        let first = domain.advance(y, [-h * v[0], -h * v[1]]);
+        // Rarely, Newton from `y - h v(y)` falls into a cycle on a strongly curved field;
+        // then it restarts from one fixed-point iterate further, and from `y - h v / 2`.
+        self.newton(step, first, y, h)
+            .or_else(|| {
+                let v1 = self.velocity.velocity(step, domain.features(first));
+                self.newton(step, domain.advance(y, [-h * v1[0], -h * v1[1]]), y, h)
+            })
+            .or_else(|| {
+                self.newton(
+                    step,
+                    domain.advance(y, [-0.5 * h * v[0], -0.5 * h * v[1]]),
+                    y,
+                    h,
+                )
+            })
+    }
+
+    /// Newton's method for `x + h v(x) = y` from `x`.
+    #[inline]
+    fn newton(
+        &self,
+        step: &[f32; VW],
+        mut x: [f32; 2],
+        y: [f32; 2],
+        h: f32,
+    ) -> Option<([f32; 2], f32)> {
+        let domain = self.def.domain;
+        let mut at = self.residual(step, x, y, h);
         for _ in 0..NEWTON_MAX_ITERS {
-            let (feat, dfeat) = domain.features_with_derivative(x);
-            let (v, j) = self.velocity.velocity_jacobian(step, feat, dfeat);
-            let det = step_det(h, &j);
-            if !(det > 0.0) {
-                return None;
-            }
-            let r = domain.difference(domain.advance(x, [h * v[0], h * v[1]]), y);
-            // d = (I + h J)^-1 r, by the 2x2 adjugate.
-            let (a00, a01, a10, a11) = (
-                1.0 + h * j[0][0],
-                h * j[0][1],
-                h * j[1][0],
-                1.0 + h * j[1][1],
-            );
-            let d = [
-                (a11 * r[0] - a01 * r[1]) / det,
-                (a00 * r[1] - a10 * r[0]) / det,
-            ];
-            x = domain.advance(x, [-d[0], -d[1]]);
-            let scale = 1.0 + x[0].abs().max(x[1].abs());
+            let (r, j, det) = at;
+            let d = if det > 0.0 {
+                // d = (I + h J)^-1 r, by the 2x2 adjugate.
+                let (a00, a01, a10, a11) = (
+                    1.0 + h * j[0][0],
+                    h * j[0][1],
+                    h * j[1][0],
+                    1.0 + h * j[1][1],
+                );
+                [
+                    (a11 * r[0] - a01 * r[1]) / det,
+                    (a00 * r[1] - a10 * r[0]) / det,
+                ]
+            } else {
+                r
+            };
             let size = d[0].abs().max(d[1].abs());
-            if size <= NEWTON_TOL * scale {
-                return Some((x, det));
-            }
             if !size.is_finite() {
                 return None;
             }
+            let scale = 1.0 + x[0].abs().max(x[1].abs());
+            if size <= NEWTON_TOL * scale {
+                // Converged: the last update is below the f32 noise of `x + h v(x)`.
+                return (det > 0.0).then_some((domain.advance(x, [-d[0], -d[1]]), det));
+            }
+            let norm = r[0].abs().max(r[1].abs());
+            let mut lambda = 1.0;
+            for _ in 0..LINE_SEARCH_HALVINGS {
+                let trial = domain.advance(x, [-lambda * d[0], -lambda * d[1]]);
+                let next = self.residual(step, trial, y, h);
+                x = trial;
+                at = next;
+                if next.0[0].abs().max(next.0[1].abs()) < norm {
+                    break;
+                }
+                lambda *= 0.5;
+            }
+            if lambda * size <= NEWTON_TOL * scale && at.2 > 0.0 {
+                // The step just taken was below the f32 noise of `x + h v(x)`: converged,
+                // with the determinant evaluated at the returned point.
+                return Some((x, at.2));
+            }
         }
         None
+    }
+
+    /// `x + h v(x) - y` (phi difference wrapped), `dv/dx` and `det(I + h dv/dx)` at `x`.
+    #[inline(always)]
+    fn residual(
+        &self,
+        step: &[f32; VW],
+        x: [f32; 2],
+        y: [f32; 2],
+        h: f32,
+    ) -> ([f32; 2], crate::net::Jacobian, f32) {
+        let domain = self.def.domain;
+        let (feat, dfeat) = domain.features_with_derivative(x);
+        let (v, j) = self.velocity.velocity_jacobian(step, feat, dfeat);
+        let r = domain.difference(domain.advance(x, [h * v[0], h * v[1]]), y);
+        (r, j, step_det(h, &j))
     }
 }

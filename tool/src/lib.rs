@@ -7,7 +7,11 @@
 //! - [`cli`]: the `diffbsdf` command line.
 
 #![forbid(unsafe_code)]
+// `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod cli;
 pub mod data;
 pub mod material;
+pub mod metrics;
+pub mod train;

@@ -15,25 +15,52 @@ const CONFIGS: &[(&str, &[f64])] = &[
     ("conductor:ggx,alpha=0.01,metal=Au", &[30.0, 85.0]),
     ("conductor:ggx,alpha=0.3,metal=Cu", &[0.0, 45.0, 88.0]),
     ("conductor:ggx,alpha=1.0,metal=Al", &[10.0, 80.0]),
-    ("conductor:ggx,alpha=0.05,alpha_y=0.3,metal=Cu", &[40.0, 80.0]),
+    (
+        "conductor:ggx,alpha=0.05,alpha_y=0.3,metal=Cu",
+        &[40.0, 80.0],
+    ),
     ("conductor:beckmann,alpha=0.01,metal=Ag", &[30.0, 85.0]),
     ("conductor:beckmann,alpha=0.3,metal=Cu", &[0.0, 60.0, 88.0]),
     ("conductor:beckmann,alpha=1.0,metal=Au", &[20.0, 85.0]),
     ("conductor:beckmann,alpha=0.4,alpha_y=0.1,metal=Ag", &[50.0]),
     ("dielectric:ggx,alpha=0.01,eta=1.5", &[30.0, 80.0, 150.0]),
-    ("dielectric:ggx,alpha=0.3,eta=1.5", &[0.0, 45.0, 88.0, 120.0, 170.0]),
+    (
+        "dielectric:ggx,alpha=0.3,eta=1.5",
+        &[0.0, 45.0, 88.0, 120.0, 170.0],
+    ),
     ("dielectric:ggx,alpha=1.0,eta=1.33", &[30.0, 135.0]),
     ("dielectric:beckmann,alpha=0.01,eta=1.5", &[40.0, 140.0]),
-    ("dielectric:beckmann,alpha=0.3,eta=1.5", &[20.0, 85.0, 160.0]),
+    (
+        "dielectric:beckmann,alpha=0.3,eta=1.5",
+        &[20.0, 85.0, 160.0],
+    ),
     ("dielectric:beckmann,alpha=1.0,eta=2.0", &[60.0, 100.0]),
-    ("dielectric:ggx,alpha=0.2,alpha_y=0.6,eta=1.5", &[50.0, 130.0]),
+    (
+        "dielectric:ggx,alpha=0.2,alpha_y=0.6,eta=1.5",
+        &[50.0, 130.0],
+    ),
     ("plastic:ggx,alpha=0.01,eta=1.5,diffuse=0.5", &[30.0, 85.0]),
-    ("plastic:beckmann,alpha=0.3,eta=1.5,diffuse=0.8/0.2/0.1", &[0.0, 70.0]),
+    (
+        "plastic:beckmann,alpha=0.3,eta=1.5,diffuse=0.8/0.2/0.1",
+        &[0.0, 70.0],
+    ),
     ("plastic:ggx,alpha=1.0,eta=1.5,diffuse=0.3", &[45.0]),
-    ("principled:base=0.8/0.3/0.2,roughness=0.5,sheen=0.5,clearcoat=0.5", &[20.0, 85.0]),
-    ("principled:base=0.9/0.6/0.2,metallic=1,roughness=0.2,anisotropic=0.8", &[45.0]),
-    ("principled:base=0.7,roughness=0.3,spec_trans=0.8,eta=1.5", &[30.0, 80.0, 140.0]),
-    ("principled:base=0.5,roughness=1,clearcoat=1,clearcoat_gloss=0.5", &[60.0]),
+    (
+        "principled:base=0.8/0.3/0.2,roughness=0.5,sheen=0.5,clearcoat=0.5",
+        &[20.0, 85.0],
+    ),
+    (
+        "principled:base=0.9/0.6/0.2,metallic=1,roughness=0.2,anisotropic=0.8",
+        &[45.0],
+    ),
+    (
+        "principled:base=0.7,roughness=0.3,spec_trans=0.8,eta=1.5",
+        &[30.0, 80.0, 140.0],
+    ),
+    (
+        "principled:base=0.5,roughness=1,clearcoat=1,clearcoat_gloss=0.5",
+        &[60.0],
+    ),
 ];
 
 const SAMPLES: usize = 200_000;
@@ -45,7 +72,11 @@ fn axes(m: &dyn Material, wi: Vec3) -> Vec<Vec3> {
     if m.is_transmissive() {
         // Smooth refraction about the normal (eta from the side index); fall back to -wi.
         let eta = m.index_of_side(Vec3::new(0.0, 0.0, -1.0)) / m.index_of_side(Vec3::Z);
-        let (eta, n) = if wi.z > 0.0 { (eta, 1.0) } else { (1.0 / eta, -1.0) };
+        let (eta, n) = if wi.z > 0.0 {
+            (eta, 1.0)
+        } else {
+            (1.0 / eta, -1.0)
+        };
         let c = wi.z.abs();
         let s2 = (1.0 - c * c) / (eta * eta);
         if s2 < 1.0 {
@@ -72,7 +103,10 @@ fn configurations() -> Vec<(String, Box<dyn Material>, Vec3)> {
 #[test]
 fn chi2_normalisation_and_pdf_consistency() {
     let configs = configurations();
-    let tests: usize = configs.iter().map(|(_, m, wi)| axes(m.as_ref(), *wi).len()).sum();
+    let tests: usize = configs
+        .iter()
+        .map(|(_, m, wi)| axes(m.as_ref(), *wi).len())
+        .sum();
     let threshold = ALPHA / tests as f64;
     let mut failures = Vec::new();
     let mut report = String::new();
@@ -84,17 +118,26 @@ fn chi2_normalisation_and_pdf_consistency() {
         for _ in 0..SAMPLES {
             let u = [r.gen::<f64>(), r.gen::<f64>(), r.gen::<f64>()];
             if let Some(s) = m.sample(*wi, u) {
-                assert!(s.pdf > 0.0 && s.pdf.is_finite() && s.weight.is_finite(), "{spec}");
+                assert!(
+                    s.pdf > 0.0 && s.pdf.is_finite() && s.weight.is_finite(),
+                    "{spec}"
+                );
                 assert!((s.wo.length() - 1.0).abs() < 1e-9);
                 let p = m.pdf(*wi, s.wo);
                 worst_pdf_err = worst_pdf_err.max((p - s.pdf).abs() / s.pdf);
                 // weight = f |cos| / pdf
                 let w = m.eval(*wi, s.wo).luminance() * s.wo.z.abs() / s.pdf;
-                assert!((w - s.weight.luminance()).abs() <= 1e-9 * (1.0 + w), "{spec}");
+                assert!(
+                    (w - s.weight.luminance()).abs() <= 1e-9 * (1.0 + w),
+                    "{spec}"
+                );
                 samples.push(s.wo);
             }
         }
-        assert!(worst_pdf_err < 1e-6, "{spec} wi={wi:?}: pdf mismatch {worst_pdf_err}");
+        assert!(
+            worst_pdf_err < 1e-6,
+            "{spec} wi={wi:?}: pdf mismatch {worst_pdf_err}"
+        );
         let frac = samples.len() as f64 / SAMPLES as f64;
         for axis in axes(m, *wi) {
             let dom = Domain::new(axis);
@@ -128,7 +171,11 @@ fn chi2_normalisation_and_pdf_consistency() {
         }
     }
     println!("{report}");
-    assert!(failures.is_empty(), "failures (threshold {threshold:.2e}):\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "failures (threshold {threshold:.2e}):\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -137,14 +184,19 @@ fn reciprocity() {
     for (spec, _) in CONFIGS {
         let m = parse_spec(spec).unwrap();
         for _ in 0..2000 {
-            let a = Vec3::from_spherical(r.gen::<f64>() * std::f64::consts::PI, r.gen::<f64>() * 6.3);
-            let b = Vec3::from_spherical(r.gen::<f64>() * std::f64::consts::PI, r.gen::<f64>() * 6.3);
+            let a =
+                Vec3::from_spherical(r.gen::<f64>() * std::f64::consts::PI, r.gen::<f64>() * 6.3);
+            let b =
+                Vec3::from_spherical(r.gen::<f64>() * std::f64::consts::PI, r.gen::<f64>() * 6.3);
             let (ea, eb) = (m.index_of_side(a), m.index_of_side(b));
             let f1 = m.eval(a, b);
             let f2 = m.eval(b, a);
             for c in 0..3 {
                 let (x, y) = (f1.0[c] / (ea * ea), f2.0[c] / (eb * eb));
-                assert!((x - y).abs() <= 1e-9 * (1.0 + x.abs().max(y.abs())), "{spec}: {a:?} {b:?} {x} {y}");
+                assert!(
+                    (x - y).abs() <= 1e-9 * (1.0 + x.abs().max(y.abs())),
+                    "{spec}: {a:?} {b:?} {x} {y}"
+                );
             }
         }
     }

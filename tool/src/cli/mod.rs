@@ -1,1 +1,71 @@
-//! The `diffbsdf` command line.
+//! The `diffbsdf` command line. Each top-level subcommand lives in its own file and adds
+//! one variant to [`Command`]; [`run`] dispatches.
+
+pub mod codegen;
+pub mod demo;
+pub mod eval;
+pub mod fit;
+pub mod material;
+
+use clap::{Parser, Subcommand};
+
+/// diffbsdf: learned BSDF importance sampling — reference materials, training data,
+/// training and evaluation.
+#[derive(Debug, Parser)]
+#[command(name = "diffbsdf", version, about)]
+pub struct Cli {
+    /// The subcommand.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Top-level subcommands. New ones (fit, eval, demo, codegen, tradeoff) add a variant
+/// here and a module beside this file.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Reference materials: evaluate and sample them.
+    #[command(subcommand)]
+    Material(material::MaterialCommand),
+    /// Train a sampler for a material and write its blob.
+    Fit(Box<fit::FitArgs>),
+    /// Measure a blob's sampling quality against a material.
+    Eval(eval::EvalArgs),
+    /// The main job: the embedded default model, its quality and cost, written to a folder.
+    Demo(demo::DemoArgs),
+    /// GLSL, WGSL or a standalone C header from a blob.
+    Codegen(codegen::CodegenArgs),
+}
+
+/// Errors the command line reports before exiting with a failure status.
+#[derive(Debug)]
+pub enum CliError {
+    /// A material command failed.
+    Material(material::MaterialError),
+    /// A fit, eval or demo command failed.
+    Train(fit::CommandError),
+    /// A codegen command failed.
+    Codegen(codegen::CodegenError),
+}
+
+impl std::fmt::Display for CliError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CliError::Material(e) => write!(f, "{e}"),
+            CliError::Train(e) => write!(f, "{e}"),
+            CliError::Codegen(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for CliError {}
+
+/// Runs a parsed command, writing results to `out`.
+pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), CliError> {
+    match cli.command {
+        Command::Material(c) => material::run(c, out).map_err(CliError::Material),
+        Command::Fit(a) => fit::run(*a, out).map_err(CliError::Train),
+        Command::Eval(a) => eval::run(a, out).map_err(CliError::Train),
+        Command::Demo(a) => demo::run(a, out).map_err(CliError::Train),
+        Command::Codegen(a) => codegen::run(a, out).map_err(CliError::Codegen),
+    }
+}

@@ -169,7 +169,11 @@ impl Microfacet {
             .try_normalize()
             .unwrap_or(Vec3::Z);
         let theta = ws.theta();
-        let phi = if ws.x == 0.0 && ws.y == 0.0 { 0.0 } else { ws.phi() };
+        let phi = if ws.x == 0.0 && ws.y == 0.0 {
+            0.0
+        } else {
+            ws.phi()
+        };
         let (sx, sy) = beckmann_visible_slopes(theta, u);
         let (sp, cp) = phi.sin_cos();
         let (rx, ry) = (cp * sx - sp * sy, sp * sx + cp * sy);

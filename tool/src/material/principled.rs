@@ -137,7 +137,11 @@ impl Principled {
 
     fn specular_fresnel(&self, cos: f64) -> Rgb {
         let c0 = self.cspec0();
-        let fs = Rgb([schlick(cos, c0.0[0]), schlick(cos, c0.0[1]), schlick(cos, c0.0[2])]);
+        let fs = Rgb([
+            schlick(cos, c0.0[0]),
+            schlick(cos, c0.0[1]),
+            schlick(cos, c0.0[2]),
+        ]);
         Self::lerp_rgb(self.metallic, Rgb::splat(fr_dielectric(cos, self.eta)), fs)
     }
 
@@ -272,7 +276,10 @@ impl Material for Principled {
         }
         if self.clearcoat > 0.0 {
             let cc = Microfacet::new(Distribution::Ggx, 0.25, 0.25);
-            let v = 0.25 * self.clearcoat * gtr1(h.z, self.clearcoat_alpha()) * schlick(cd, 0.04)
+            let v = 0.25
+                * self.clearcoat
+                * gtr1(h.z, self.clearcoat_alpha())
+                * schlick(cd, 0.04)
                 * cc.g(wi, wo, h)
                 / (4.0 * ci * co);
             out = out + Rgb::splat(v);
@@ -288,22 +295,26 @@ impl Material for Principled {
     fn sample(&self, wi: Vec3, u: [f64; 3]) -> Option<MaterialSample> {
         let p = self.probs(wi);
         let uv = [u[0], u[1]];
-        let mut x = u[2];
+        let x = u[2];
         let wo = if x < p.diffuse {
             square_to_cosine_hemisphere(uv)
-        } else if {
-            x -= p.diffuse;
-            x < p.specular
-        } {
-            wi.reflect(self.microfacet().sample_visible(wi, uv))
-        } else if {
-            x -= p.specular;
-            x < p.clearcoat
-        } {
+        } else if x < p.diffuse + p.specular {
+            let wo = wi.reflect(self.microfacet().sample_visible(wi, uv));
+            if wo.z <= 0.0 {
+                return None;
+            }
+            wo
+        } else if x < p.diffuse + p.specular + p.clearcoat {
             let a2 = self.clearcoat_alpha().powi(2);
-            let cos_h = ((1.0 - a2.powf(1.0 - uv[0])) / (1.0 - a2)).clamp(0.0, 1.0).sqrt();
+            let cos_h = ((1.0 - a2.powf(1.0 - uv[0])) / (1.0 - a2))
+                .clamp(0.0, 1.0)
+                .sqrt();
             let h = Vec3::from_spherical(cos_h.acos(), 2.0 * PI * uv[1]);
-            wi.reflect(h)
+            let wo = wi.reflect(h);
+            if wo.z <= 0.0 {
+                return None;
+            }
+            wo
         } else {
             self.dielectric().sample_refraction(wi, uv)?
         };

@@ -98,13 +98,20 @@ impl Params {
     }
 
     fn take(&mut self, key: &str) -> Option<String> {
-        let i = self.items.iter().position(|(k, v)| k == key && v.is_some())?;
+        let i = self
+            .items
+            .iter()
+            .position(|(k, v)| k == key && v.is_some())?;
         self.items.remove(i).1
     }
 
     /// Removes the bare keyword `word`; true if it was present.
     pub fn flag(&mut self, word: &str) -> bool {
-        match self.items.iter().position(|(k, v)| k == word && v.is_none()) {
+        match self
+            .items
+            .iter()
+            .position(|(k, v)| k == word && v.is_none())
+        {
             Some(i) => {
                 self.items.remove(i);
                 true
@@ -208,12 +215,13 @@ pub fn parse_spec(spec: &str) -> Result<Box<dyn Material>, SpecError> {
             let mut p = Params::new("conductor", rest);
             let mf = p.microfacet(0.1)?;
             let c = match p.take("metal") {
-                Some(name) => {
-                    Conductor::metal(mf, Metal::from_name(&name).ok_or(SpecError::UnknownMetal(name))?)
-                }
+                Some(name) => Conductor::metal(
+                    mf,
+                    Metal::from_name(&name).ok_or(SpecError::UnknownMetal(name))?,
+                ),
                 None => {
                     let eta = p.rgb("eta", Rgb([0.200438, 0.924033, 1.10221]), 1e-4, 100.0)?;
-                    let k = p.rgb("k", Rgb([3.91295, 2.45285, 2.14219]), 0.0, 100.0)?;
+                    let k = p.rgb("k", Rgb([3.91295, 2.45285, 2.14219]), 0.0, 1e4)?;
                     Conductor {
                         mf,
                         eta: eta.0,
@@ -284,7 +292,10 @@ mod tests {
 
     #[test]
     fn rejects_bad_specs() {
-        assert!(matches!(parse_spec("velvet"), Err(SpecError::UnknownModel(_))));
+        assert!(matches!(
+            parse_spec("velvet"),
+            Err(SpecError::UnknownModel(_))
+        ));
         assert!(matches!(
             parse_spec("conductor:metal=Pb"),
             Err(SpecError::UnknownMetal(_))

@@ -48,11 +48,7 @@ pub fn equal_area_square_to_sphere(p: [f64; 2]) -> Vec3 {
     };
     let z = (1.0 - r * r).copysign(signed_distance);
     let s = r * (2.0 - r * r).max(0.0).sqrt();
-    Vec3::new(
-        phi.cos().copysign(a) * s,
-        phi.sin().copysign(b) * s,
-        z,
-    )
+    Vec3::new(phi.cos().copysign(a) * s, phi.sin().copysign(b) * s, z)
 }
 
 /// Inverse of [`equal_area_square_to_sphere`].
@@ -83,11 +79,17 @@ mod tests {
     fn equal_area_round_trip() {
         for i in 0..50 {
             for j in 0..50 {
-                let p = [-0.99 + 1.98 * i as f64 / 49.0, -0.99 + 1.98 * j as f64 / 49.0];
+                let p = [
+                    -0.99 + 1.98 * i as f64 / 49.0,
+                    -0.99 + 1.98 * j as f64 / 49.0,
+                ];
                 let w = equal_area_square_to_sphere(p);
                 assert!((w.length() - 1.0).abs() < 1e-12);
                 let q = equal_area_sphere_to_square(w);
-                assert!((p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9, "{p:?} {q:?}");
+                assert!(
+                    (p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9,
+                    "{p:?} {q:?}"
+                );
             }
         }
     }

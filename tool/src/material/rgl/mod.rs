@@ -63,7 +63,10 @@ fn check_shape(
     expect: &[Option<usize>],
 ) -> Result<(), RglError> {
     if f.shape.len() != expect.len()
-        || f.shape.iter().zip(expect).any(|(s, e)| e.is_some_and(|e| e != *s))
+        || f.shape
+            .iter()
+            .zip(expect)
+            .any(|(s, e)| e.is_some_and(|e| e != *s))
     {
         return Err(RglError::BadShape(name));
     }
@@ -83,7 +86,9 @@ impl RglMaterial {
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, RglError> {
         let tf = TensorFile::parse(bytes)?;
         let description = match tf.field("description") {
-            Ok(f) => String::from_utf8_lossy(f.bytes).trim_end_matches('\0').to_string(),
+            Ok(f) => String::from_utf8_lossy(f.bytes)
+                .trim_end_matches('\0')
+                .to_string(),
             Err(_) => String::new(),
         };
         let phi_f = tf.field("phi_i")?;
@@ -96,7 +101,10 @@ impl RglMaterial {
         if np == 0 || nt == 0 {
             return Err(RglError::BadShape("theta_i"));
         }
-        if theta_i.iter().any(|t| !(-1e-6..=FRAC_PI_2 + 1e-4).contains(t)) {
+        if theta_i
+            .iter()
+            .any(|t| !(-1e-6..=FRAC_PI_2 + 1e-4).contains(t))
+        {
             return Err(RglError::BadAngles("theta_i"));
         }
         let isotropic = np <= 2;
@@ -108,7 +116,14 @@ impl RglMaterial {
         let table2 = |name: &'static str| -> Result<Warp2D, RglError> {
             let f = tf.field(name)?;
             check_shape(f, name, &[None, None])?;
-            Warp2D::new(name, f.f32_values(name)?, f.shape[1], f.shape[0], vec![], false)
+            Warp2D::new(
+                name,
+                f.f32_values(name)?,
+                f.shape[1],
+                f.shape[0],
+                vec![],
+                false,
+            )
         };
         let ndf = table2("ndf")?;
         let sigma = table2("sigma")?;
@@ -165,7 +180,11 @@ impl RglMaterial {
         }
         let wm = (wi + wo).try_normalize()?;
         let (theta_i, phi_i) = (wi.theta(), wi.phi());
-        let phi_m = if self.isotropic { wm.phi() - phi_i } else { wm.phi() };
+        let phi_m = if self.isotropic {
+            wm.phi() - phi_i
+        } else {
+            wm.phi()
+        };
         let mut uy = phi_to_u(phi_m);
         uy -= uy.floor();
         Some(([phi_i, theta_i], [theta_to_u(wm.theta()), uy], wm))

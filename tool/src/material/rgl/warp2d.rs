@@ -319,7 +319,10 @@ mod tests {
         let mut s = 0.0;
         for a in 0..n {
             for b in 0..n {
-                s += t.eval([(a as f64 + 0.5) / n as f64, (b as f64 + 0.5) / n as f64], &[0.8]);
+                s += t.eval(
+                    [(a as f64 + 0.5) / n as f64, (b as f64 + 0.5) / n as f64],
+                    &[0.8],
+                );
             }
         }
         assert!((s / (n * n) as f64 - 1.0).abs() < 1e-4);

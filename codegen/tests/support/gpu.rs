@@ -1,0 +1,197 @@
+//! Runs generated shaders as compute shaders on lavapipe (Mesa's software Vulkan driver)
+//! through wgpu: WGSL through wgpu's own front end, GLSL as glslang's SPIR-V through
+//! wgpu's SPIR-V passthrough.
+#![allow(dead_code)]
+
+use std::borrow::Cow;
+
+pub const LAVAPIPE_HINT: &str = "apt-get install -y mesa-vulkan-drivers libvulkan1";
+
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub name: String,
+    layout: wgpu::PipelineLayout,
+    bgl: wgpu::BindGroupLayout,
+}
+
+/// The lavapipe device with f16 and SPIR-V passthrough; fails (never skips) when there is
+/// none, saying what to install.
+pub fn lavapipe() -> Gpu {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::VULKAN;
+    let instance = wgpu::Instance::new(desc);
+    let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+    let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+    let adapter = adapters
+        .into_iter()
+        .find(|a| a.get_info().name.contains("llvmpipe"))
+        .unwrap_or_else(|| {
+            panic!(
+                "no lavapipe Vulkan adapter (found {names:?}): install the driver and loader with `{LAVAPIPE_HINT}`"
+            )
+        });
+    let name = adapter.get_info().name;
+    let needed = wgpu::Features::SHADER_F16 | wgpu::Features::PASSTHROUGH_SHADERS;
+    assert!(
+        adapter.features().contains(needed),
+        "{name} lacks {:?}: a newer `{LAVAPIPE_HINT}` is needed",
+        needed - adapter.features()
+    );
+    let desc = wgpu::DeviceDescriptor {
+        label: Some("diffbsdf conformance"),
+        required_features: needed,
+        required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+        // SAFETY (of the flag): passthrough shaders are only given SPIR-V that spirv-val
+        // accepted.
+        experimental_features: unsafe { wgpu::ExperimentalFeatures::enabled() },
+        memory_hints: wgpu::MemoryHints::Performance,
+        trace: wgpu::Trace::Off,
+    };
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&desc)).expect("lavapipe device");
+    let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &[storage(0, true), storage(1, true), storage(2, false)],
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(&bgl)],
+        immediate_size: 0,
+    });
+    Gpu {
+        device,
+        queue,
+        name,
+        layout,
+        bgl,
+    }
+}
+
+impl Gpu {
+    pub fn wgsl(&self, source: &str) -> wgpu::ShaderModule {
+        self.device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: None,
+                source: wgpu::ShaderSource::Wgsl(Cow::Owned(source.to_string())),
+            })
+    }
+
+    pub fn spirv(&self, words: Vec<u32>) -> wgpu::ShaderModule {
+        let desc = wgpu::ShaderModuleDescriptorPassthrough {
+            label: None,
+            entry_points: Cow::Owned(vec![wgpu::PassthroughShaderEntryPoint {
+                name: Cow::Borrowed("main"),
+                workgroup_size: (64, 1, 1),
+            }]),
+            spirv: Some(Cow::Owned(words)),
+            ..Default::default()
+        };
+        // SAFETY: the words come from glslangValidator and passed spirv-val.
+        unsafe { self.device.create_shader_module_passthrough(desc) }
+    }
+
+    /// Runs `main` over `inputs` (two vec4 per item), returns two vec4 per item.
+    pub fn run(
+        &self,
+        module: &wgpu::ShaderModule,
+        params: &[f32],
+        inputs: &[[f32; 4]],
+    ) -> Vec<[f32; 4]> {
+        use wgpu::util::DeviceExt;
+        let d = &self.device;
+        let bytes = |v: &[f32]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+        let params = if params.is_empty() {
+            &[0.0f32][..]
+        } else {
+            params
+        };
+        let flat: Vec<f32> = inputs.iter().flatten().copied().collect();
+        let pbuf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: None,
+            contents: &bytes(params),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let ibuf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: None,
+            contents: &bytes(&flat),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let size = (flat.len() * 4) as u64;
+        let obuf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let rbuf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: None,
+            layout: Some(&self.layout),
+            module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &self.bgl,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: pbuf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: ibuf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: obuf.as_entire_binding(),
+                },
+            ],
+        });
+        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            let items = inputs.len() / 2;
+            pass.dispatch_workgroups(items.div_ceil(64) as u32, 1, 1);
+        }
+        enc.copy_buffer_to_buffer(&obuf, 0, &rbuf, 0, size);
+        self.queue.submit([enc.finish()]);
+        rbuf.map_async(wgpu::MapMode::Read, .., |r| r.expect("map"));
+        d.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        })
+        .expect("poll");
+        let view = rbuf.get_mapped_range(..).expect("mapped range");
+        let out: Vec<f32> = view
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        out.chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect()
+    }
+}

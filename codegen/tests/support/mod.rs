@@ -1,0 +1,4 @@
+//! Shared helpers of the codegen tests.
+pub mod gpu;
+pub mod shaders;
+pub mod vectors;

@@ -1,0 +1,508 @@
+//! Shared conformance vectors and helpers, used by the codegen tests and (through
+//! `#[path]`) by the FFI tests: the random-weight models, the `(wi, u)` and `(wi, wo)`
+//! vectors with their edge cases, the tolerance checks and the tools (gcc, g++) runners.
+#![allow(dead_code)]
+
+use diffbsdf::blob::{blob_len, write_blob};
+use diffbsdf::glam::{Vec2, Vec3};
+use diffbsdf::{Domain, Model3x32, Model4x32, ModelDef, ModelName, Precision};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The f32 conformance tolerance of the issue: 1e-5 relative (directions are unit
+/// vectors, so their error is relative to 1).
+pub const TOL_F32: f32 = 1e-5;
+
+/// 1 - 2^-24: the largest f32 below 1.
+pub const ONE_MINUS_EPS: f32 = 1.0 - 1.0 / 16_777_216.0;
+
+/// A model under test: a name and its blob.
+pub struct TestModel {
+    pub name: String,
+    pub blob: Vec<u8>,
+}
+
+/// SplitMix64: a seeded generator, so tests need no extra crate.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed ^ 0x9E37_79B9_7F4A_7C15)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        let u = (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32);
+        lo + (hi - lo) * u
+    }
+}
+
+/// Parameters of a random model in blob order: hidden layers with weights uniform in
+/// +-1.7/sqrt(fan-in) (the `wi` columns of the first velocity layer damped by 0.3), the
+/// base readout biased so that p0 sits inside the domain with scales in [0.08, 0.4], and
+/// the velocity readout scaled by `stretch` so every Euler step stays invertible while
+/// deforming p0 visibly.
+pub fn random_params(def: &ModelDef, seed: u64, stretch: f32) -> Vec<f32> {
+    let mut rng = Rng::new(seed);
+    let mut p = Vec::with_capacity(def.param_count());
+    let layer = |p: &mut Vec<f32>,
+                 rng: &mut Rng,
+                 rows: usize,
+                 cols: usize,
+                 scale: f32,
+                 damp_from: usize| {
+        for _ in 0..rows {
+            for c in 0..cols {
+                let damp = if c >= damp_from { 0.3 } else { 1.0 };
+                p.push(damp * rng.range(-scale, scale));
+            }
+        }
+    };
+    let (bw, be) = (def.base.width as usize, def.base.encoding_len());
+    let mut fan = be;
+    for _ in 0..def.base.hidden_layers {
+        layer(
+            &mut p,
+            &mut rng,
+            bw,
+            fan,
+            1.7 / (fan as f32).sqrt(),
+            usize::MAX,
+        );
+        (0..bw).for_each(|_| p.push(rng.range(-0.1, 0.1)));
+        fan = bw;
+    }
+    layer(
+        &mut p,
+        &mut rng,
+        4,
+        bw,
+        0.17 / (bw as f32).sqrt(),
+        usize::MAX,
+    );
+    for r in 0..4 {
+        let ln_scale = rng.range(0.08f32.ln(), 0.4f32.ln());
+        p.push(match (def.domain, r) {
+            (Domain::Disk, 0 | 1) => rng.range(-0.4, 0.4),
+            (Domain::Sphere, 0) => rng.range(0.3, 2.8),
+            (Domain::Sphere, 2) => rng.range(-3.0, 3.0),
+            _ => ln_scale,
+        });
+    }
+    let vw = def.velocity.width as usize;
+    let mut fan = def.velocity_inputs();
+    for k in 0..def.velocity.hidden_layers {
+        let damp_from = if k == 0 {
+            def.domain.feature_count() + 1
+        } else {
+            usize::MAX
+        };
+        layer(
+            &mut p,
+            &mut rng,
+            vw,
+            fan,
+            1.7 / (fan as f32).sqrt(),
+            damp_from,
+        );
+        (0..vw).for_each(|_| p.push(rng.range(-0.2, 0.2)));
+        fan = vw;
+    }
+    layer(
+        &mut p,
+        &mut rng,
+        2,
+        vw,
+        stretch / (vw as f32).sqrt(),
+        usize::MAX,
+    );
+    (0..2).for_each(|_| p.push(rng.range(-0.1, 0.1)));
+    assert_eq!(p.len(), def.param_count());
+    p
+}
+
+/// A blob of `def` with random parameters.
+pub fn random_blob(def: &ModelDef, seed: u64, stretch: f32) -> Vec<u8> {
+    let params = random_params(def, seed, stretch);
+    let mut out = vec![0u8; blob_len(def)];
+    write_blob(def, &params, &mut out).expect("write blob");
+    out
+}
+
+fn named(mut def: ModelDef, name: &str, precision: Precision) -> ModelDef {
+    def.name = ModelName::new(name).expect("name");
+    def.precision = precision;
+    def
+}
+
+/// The random-weight models every conformance test runs (the paper's disk and sphere
+/// architectures, f32 and f16 weights), and every shipped model in `models/`.
+pub fn test_models() -> Vec<TestModel> {
+    let disk = ModelDef::paper_disk();
+    let sphere = ModelDef::paper_sphere();
+    let mut models = vec![
+        TestModel {
+            name: "random_disk".into(),
+            blob: random_blob(&named(disk, "random_disk", Precision::F32), 11, 1.2),
+        },
+        TestModel {
+            name: "random_sphere".into(),
+            blob: random_blob(&named(sphere, "random_sphere", Precision::F32), 12, 1.2),
+        },
+        TestModel {
+            name: "random_disk_f16".into(),
+            blob: random_blob(&named(disk, "random_disk_f16", Precision::F16), 13, 1.2),
+        },
+    ];
+    models.extend(shipped_models());
+    models
+}
+
+/// Every blob under `models/` (any file starting with the blob magic).
+pub fn shipped_models() -> Vec<TestModel> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models");
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return out;
+    };
+    let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    paths.sort();
+    for p in paths {
+        let Ok(bytes) = std::fs::read(&p) else {
+            continue;
+        };
+        if bytes.starts_with(b"DIFFBSDF") {
+            let name = p
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            out.push(TestModel { name, blob: bytes });
+        }
+    }
+    out
+}
+
+/// The kernel's answers for one model (whichever compiled shape it has).
+pub enum Kernel {
+    Three(Box<Model3x32>),
+    Four(Box<Model4x32>),
+}
+
+impl Kernel {
+    pub fn load(blob: &[u8]) -> Kernel {
+        match Model3x32::from_blob(blob) {
+            Ok(m) => Kernel::Three(Box::new(m)),
+            Err(_) => Kernel::Four(Box::new(Model4x32::from_blob(blob).expect("blob loads"))),
+        }
+    }
+    pub fn domain(&self) -> Domain {
+        match self {
+            Kernel::Three(m) => m.def().domain,
+            Kernel::Four(m) => m.def().domain,
+        }
+    }
+    pub fn default_steps(&self) -> u32 {
+        match self {
+            Kernel::Three(m) => m.default_steps(),
+            Kernel::Four(m) => m.default_steps(),
+        }
+    }
+    /// `steps = 0` means the default, as in the C API and the generated code.
+    fn steps(&self, steps: u32) -> u32 {
+        if steps == 0 {
+            self.default_steps()
+        } else {
+            steps
+        }
+    }
+    pub fn direction(&self, wi: [f32; 3], u: [f32; 2], steps: u32) -> Option<[f32; 3]> {
+        let (wi, u, s) = (Vec3::from(wi), Vec2::from(u), self.steps(steps));
+        match self {
+            Kernel::Three(m) => m.sample_direction_steps(wi, u, s),
+            Kernel::Four(m) => m.sample_direction_steps(wi, u, s),
+        }
+        .map(|v| v.to_array())
+    }
+    pub fn sample(&self, wi: [f32; 3], u: [f32; 2], steps: u32) -> Option<([f32; 3], f32)> {
+        let (wi, u, s) = (Vec3::from(wi), Vec2::from(u), self.steps(steps));
+        match self {
+            Kernel::Three(m) => m.sample_steps(wi, u, s),
+            Kernel::Four(m) => m.sample_steps(wi, u, s),
+        }
+        .map(|s| (s.wo.to_array(), s.pdf))
+    }
+    /// How much the sampling map `x0 -> wo` amplifies a perturbation of the flow's start
+    /// point near `u` (finite differences along both `u` axes, 1e-3 apart): rounding
+    /// differences of order 1e-7 injected along the flow (the kernel's build contracts
+    /// multiply-adds into FMAs, gcc and the shader compilers may not) reach the direction
+    /// multiplied by about this much. 1 or less for gentle flows; large for the sharp lobes
+    /// of trained models.
+    pub fn amplification(&self, wi: [f32; 3], u: [f32; 2], steps: u32) -> f32 {
+        let base = match self {
+            Kernel::Three(m) => m.base_distribution(Vec3::from(wi)),
+            Kernel::Four(m) => m.base_distribution(Vec3::from(wi)),
+        };
+        let (Some(base), Some(wo)) = (base, self.direction(wi, u, steps)) else {
+            return 1.0;
+        };
+        let x0 = base.sample(u);
+        let mut amp = 1.0f32;
+        for j in 0..2 {
+            let mut v = u;
+            v[j] = if u[j] > 0.5 { u[j] - 1e-3 } else { u[j] + 1e-3 };
+            let x1 = base.sample(v);
+            let dx = ((x1[0] - x0[0]).powi(2) + (x1[1] - x0[1]).powi(2)).sqrt();
+            if let Some(w1) = self.direction(wi, v, steps) {
+                let dw = (0..3).map(|i| (w1[i] - wo[i]).powi(2)).sum::<f32>().sqrt();
+                if dx > 0.0 && (dw / dx).is_finite() {
+                    amp = amp.max(dw / dx);
+                }
+            }
+        }
+        amp
+    }
+
+    /// `|d ln pdf / d angle|` at `wo` (per radian, largest over two tangent directions),
+    /// by central differences through the kernel: the PDF of a given direction amplifies
+    /// rounding differences of the inverse (libm's vs the C library's sin, cos, exp) by
+    /// about this much, as [`measure_condition`] does for the measure alone.
+    pub fn pdf_condition(&self, wi: [f32; 3], wo: [f32; 3], steps: u32) -> f32 {
+        let w = Vec3::from(wo);
+        let t1 = w.any_orthonormal_vector();
+        let t2 = w.cross(t1);
+        let delta = 1e-3f32;
+        let ln = |v: Vec3| self.pdf(wi, v.normalize().to_array(), steps).ln();
+        let mut c = 0.0f32;
+        for t in [t1, t2] {
+            let g = (ln(w + t * delta) - ln(w - t * delta)) / (2.0 * delta);
+            if g.is_finite() {
+                c = c.max(g.abs());
+            }
+        }
+        c
+    }
+
+    pub fn pdf(&self, wi: [f32; 3], wo: [f32; 3], steps: u32) -> f32 {
+        let (wi, wo, s) = (Vec3::from(wi), Vec3::from(wo), self.steps(steps));
+        match self {
+            Kernel::Three(m) => m.pdf_steps(wi, wo, s),
+            Kernel::Four(m) => m.pdf_steps(wi, wo, s),
+        }
+    }
+}
+
+fn dir(theta: f32, phi: f32) -> [f32; 3] {
+    [
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    ]
+}
+
+/// Incident directions: normal, a spread of angles, grazing (`z = 1e-3` and exactly 0),
+/// and on the sphere the lower hemisphere too.
+pub fn incident_directions(domain: Domain) -> Vec<[f32; 3]> {
+    let half_pi = std::f32::consts::FRAC_PI_2;
+    let mut v = vec![[0.0, 0.0, 1.0]];
+    for (k, theta) in [0.3f32, 0.8, 1.2, 1.5, half_pi - 1e-3]
+        .into_iter()
+        .enumerate()
+    {
+        v.push(dir(theta, 0.7 + 1.9 * k as f32));
+    }
+    v.push([1.0, 0.0, 0.0]); // exactly grazing: z = 0
+    if domain == Domain::Sphere {
+        v.push(dir(2.0, -2.5));
+        v.push(dir(std::f32::consts::PI - 0.1, 1.0));
+        v.push([0.0, 0.0, -1.0]);
+    }
+    v
+}
+
+/// `(wi, u)` vectors: a grid of `u` with 0, 1/2, 1 - 2^-24 and 1 on each axis for every
+/// incident direction, then invalid inputs (non-unit, zero, NaN and infinite `wi`, `u`
+/// outside [0, 1] or NaN, and for disk models `wi` below the horizon).
+pub fn sample_vectors(domain: Domain) -> Vec<([f32; 3], [f32; 2])> {
+    let us = [0.0, 0.137, 0.5, 0.731, ONE_MINUS_EPS, 1.0];
+    let mut v = Vec::new();
+    for wi in incident_directions(domain) {
+        for &a in &us {
+            for &b in &us {
+                v.push((wi, [a, b]));
+            }
+        }
+    }
+    let n = [0.0, 0.0, 1.0];
+    let bad_wi = [
+        [0.0, 0.0, 2.0],
+        [0.0, 0.0, 0.0],
+        [f32::NAN, 0.0, 1.0],
+        [f32::INFINITY, 0.0, 0.0],
+    ];
+    for wi in bad_wi {
+        v.push((wi, [0.5, 0.5]));
+    }
+    for u in [[-0.1, 0.5], [0.5, 1.5], [f32::NAN, 0.5]] {
+        v.push((n, u));
+    }
+    v.push(([0.0, 0.6, -0.8], [0.5, 0.5])); // below the horizon (invalid on the disk)
+    v.push(([0.0, 0.0, 1.0004], [0.3, 0.3])); // non-unit within tolerance: accepted
+    v
+}
+
+/// `(wi, wo)` vectors: the kernel's own samples (so most PDFs are positive), a grid of
+/// outgoing directions including grazing ones, the poles, below-horizon and non-unit `wo`.
+pub fn pdf_vectors(kernel: &Kernel, samples: &[([f32; 3], [f32; 2])]) -> Vec<([f32; 3], [f32; 3])> {
+    let mut v = Vec::new();
+    for &(wi, u) in samples {
+        if let Some(wo) = kernel.direction(wi, u, 0) {
+            v.push((wi, wo));
+        }
+    }
+    let wi = dir(0.6, 0.4);
+    for theta in [
+        0.05f32,
+        0.5,
+        1.0,
+        1.45,
+        std::f32::consts::FRAC_PI_2 - 1e-3,
+        2.2,
+    ] {
+        for phi in [-3.0f32, -1.0, 0.0, 1.3, 3.1] {
+            v.push((wi, dir(theta, phi)));
+        }
+    }
+    v.push((wi, [0.0, 0.0, 1.0]));
+    v.push((wi, [0.0, 0.0, -1.0]));
+    v.push((wi, [1.0, 0.0, 0.0]));
+    v.push((wi, [0.0, 0.0, 0.5]));
+    v.push((wi, [f32::NAN, 0.0, 1.0]));
+    v.push(([0.0, 0.0, 3.0], [0.0, 0.0, 1.0]));
+    v
+}
+
+/// Largest error seen by a comparison, for reporting.
+#[derive(Default, Debug, Clone, Copy)]
+pub struct Errors {
+    pub max_dir: f32,
+    /// Largest PDF error relative to the PDF, divided by `max(1, |ln pdf|)`.
+    pub max_pdf_rel: f32,
+    pub compared: usize,
+    /// Comparisons where the kernel's answer was a valid sample or a positive PDF.
+    pub valid: usize,
+}
+
+/// Compares an optional direction (`None` written as zeros) with the kernel's.
+pub fn check_dir(what: &str, got: [f32; 3], want: Option<[f32; 3]>, tol: f32, e: &mut Errors) {
+    e.compared += 1;
+    match want {
+        None => assert!(got == [0.0; 3], "{what}: kernel says invalid, got {got:?}"),
+        Some(w) => {
+            e.valid += 1;
+            let d = (0..3).map(|i| (got[i] - w[i]).abs()).fold(0.0f32, f32::max);
+            e.max_dir = e.max_dir.max(d);
+            assert!(
+                d <= tol,
+                "{what}: direction {got:?} vs kernel {w:?}: error {d:e} > allowed {tol:e}"
+            );
+        }
+    }
+}
+
+/// Compares a PDF with the kernel's (`0` for invalid on both sides). The relative error
+/// allowed is `tol * max(1, |ln want|)`: a density is `exp` of a sum of terms of the size
+/// of `ln want`, whose f32 rounding (and FMA contraction in the kernel build) scales with
+/// them; for PDFs between 1/e and e this is exactly `tol`.
+///
+/// `measure` is [`measure_condition`] of the direction: `pdf_w = pdf_x / sin(theta)` on
+/// the sphere and `pdf_x cos(theta)` on the disk are ill-conditioned at the poles and the
+/// horizon, where a direction error far below 1e-5 moves the density by much more.
+pub fn check_pdf(what: &str, got: f32, want: f32, measure: f32, tol: f32, e: &mut Errors) {
+    e.compared += 1;
+    if want == 0.0 {
+        assert!(got == 0.0, "{what}: kernel PDF 0, got {got:e}");
+        return;
+    }
+    e.valid += 1;
+    let scale = want.ln().abs().max(1.0) + measure;
+    let r = (got - want).abs() / want.abs();
+    e.max_pdf_rel = e.max_pdf_rel.max(r / scale);
+    let tol = tol * scale;
+    assert!(
+        r <= tol,
+        "{what}: PDF {got:e} vs kernel {want:e}: relative error {r:e} > allowed {tol:e}"
+    );
+}
+
+/// `|d ln(pdf_w / pdf_x) / d theta|` at `wo`: `|cot theta|` on the sphere, `tan theta` on
+/// the disk (0 when `wo` is not a direction).
+pub fn measure_condition(domain: Domain, wo: [f32; 3]) -> f32 {
+    let rho = (wo[0] * wo[0] + wo[1] * wo[1]).sqrt();
+    let z = wo[2].abs();
+    let c = match domain {
+        Domain::Sphere => z / rho,
+        Domain::Disk => rho / z,
+    };
+    if c.is_finite() {
+        c
+    } else {
+        0.0
+    }
+}
+
+/// Writes little-endian f32s.
+pub fn write_f32s(path: &Path, data: &[f32]) {
+    let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
+    std::fs::write(path, bytes).expect("write test vectors");
+}
+
+/// Reads little-endian f32s.
+pub fn read_f32s(path: &Path) -> Vec<f32> {
+    let bytes = std::fs::read(path).expect("read results");
+    bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+/// A fresh scratch directory under cargo's per-target temp dir.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch dir");
+    d
+}
+
+/// The strict C flags of the issue.
+pub const C_FLAGS: [&str; 5] = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"];
+
+/// Runs a tool; fails the test with what to install if it is missing, and with its output
+/// if it fails.
+pub fn run_tool(cmd: &mut Command, install_hint: &str) -> String {
+    let out = match cmd.output() {
+        Ok(o) => o,
+        Err(e) => panic!(
+            "cannot run {:?} ({e}): install it with `{install_hint}`",
+            cmd.get_program()
+        ),
+    };
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.status.success(),
+        "{cmd:?} failed ({}):\n{text}",
+        out.status
+    );
+    text
+}
+
+pub const GCC_HINT: &str = "apt-get install -y gcc g++";

@@ -1,0 +1,211 @@
+//! The C API from C: the header compiled by gcc (`-std=c99 -Wall -Wextra -Werror
+//! -pedantic`) and once as C++ by g++, linked against the staticlib this test run built,
+//! run on the shared conformance vectors and compared with the Rust kernel within 1e-5.
+
+#[path = "../../codegen/tests/support/vectors.rs"]
+mod vectors;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use vectors::*;
+
+fn crate_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The static library cargo built for this very test run, next to the test binary (the lib
+/// target is built with all its crate types before integration tests run; the copy in
+/// `target/<profile>/` may come from another build).
+fn staticlib() -> PathBuf {
+    let exe = std::env::current_exe().expect("test exe path");
+    let deps = exe.parent().expect("target/<profile>/deps");
+    let lib = deps.join("libdiffbsdf_ffi.a");
+    assert!(
+        lib.exists(),
+        "{} missing: cargo did not build the staticlib for this test run",
+        lib.display()
+    );
+    lib
+}
+
+fn build_harness(dir: &Path) -> PathBuf {
+    let exe = dir.join("harness");
+    let mut cmd = Command::new("gcc");
+    cmd.args(C_FLAGS)
+        .arg("-I")
+        .arg(crate_dir().join("include"))
+        .arg(crate_dir().join("tests/c/harness.c"))
+        .arg(staticlib())
+        .args(["-lm", "-lpthread", "-ldl", "-o"])
+        .arg(&exe);
+    run_tool(&mut cmd, GCC_HINT);
+    exe
+}
+
+#[test]
+fn header_compiles_as_cpp() {
+    let dir = scratch("ffi_cpp");
+    let src = dir.join("use.cpp");
+    std::fs::write(
+        &src,
+        "#include \"diffbsdf.h\"\nint main() { diffbsdf_sample_result s = {{0, 0, 1}, 1}; \
+         return diffbsdf_version() == DIFFBSDF_VERSION && s.pdf > 0 ? 0 : 1; }\n",
+    )
+    .expect("write");
+    let mut cmd = Command::new("g++");
+    cmd.args([
+        "-std=c++11",
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        "-pedantic",
+        "-I",
+    ])
+    .arg(crate_dir().join("include"))
+    .arg(&src)
+    .arg(staticlib())
+    .args(["-lm", "-lpthread", "-ldl", "-o"])
+    .arg(dir.join("use"));
+    run_tool(&mut cmd, GCC_HINT);
+    run_tool(&mut Command::new(dir.join("use")), "");
+}
+
+#[test]
+fn header_version_matches_crate() {
+    let header = std::fs::read_to_string(crate_dir().join("include/diffbsdf.h")).expect("header");
+    let want = format!(
+        "#define DIFFBSDF_VERSION_STRING \"{}\"",
+        env!("CARGO_PKG_VERSION")
+    );
+    assert!(
+        header.contains(&want),
+        "header version macros out of date: want `{want}`"
+    );
+    let v = diffbsdf_ffi::diffbsdf_version();
+    assert!(
+        header.contains(&format!("#define DIFFBSDF_VERSION {v}\n")),
+        "DIFFBSDF_VERSION != {v}"
+    );
+}
+
+#[test]
+fn header_lists_every_status() {
+    let header = std::fs::read_to_string(crate_dir().join("include/diffbsdf.h")).expect("header");
+    for s in diffbsdf_ffi::diffbsdf_status::ALL {
+        let line = format!("{s:?} = {},", s as i32);
+        let last = format!("{s:?} = {} ", s as i32);
+        assert!(
+            header.contains(&line) || header.contains(&last),
+            "header lacks `{line}`"
+        );
+    }
+}
+
+#[test]
+fn c_program_matches_kernel() {
+    let dir = scratch("ffi_conformance");
+    let exe = build_harness(&dir);
+    let mut total = Errors::default();
+    for model in test_models() {
+        let kernel = Kernel::load(&model.blob);
+        let samples = sample_vectors(kernel.domain());
+        let pdfs = pdf_vectors(&kernel, &samples);
+        let blob = dir.join(format!("{}.bin", model.name));
+        std::fs::write(&blob, &model.blob).expect("write blob");
+        let flat: Vec<f32> = samples
+            .iter()
+            .flat_map(|(w, u)| w.iter().chain(u).copied())
+            .collect();
+        write_f32s(&dir.join("s.f32"), &flat);
+        let flat: Vec<f32> = pdfs
+            .iter()
+            .flat_map(|(a, b)| a.iter().chain(b).copied())
+            .collect();
+        write_f32s(&dir.join("p.f32"), &flat);
+        for steps in [0u32, 2 * kernel.default_steps()] {
+            let out_path = dir.join("out.f32");
+            let mut cmd = Command::new(&exe);
+            cmd.arg(&blob)
+                .arg(dir.join("s.f32"))
+                .arg(dir.join("p.f32"))
+                .arg(steps.to_string())
+                .arg(&out_path);
+            run_tool(&mut cmd, "");
+            let out = read_f32s(&out_path);
+            assert_eq!(out.len(), 16 * samples.len() + 2 * pdfs.len());
+            let mut e = Errors::default();
+            for (i, &(wi, u)) in samples.iter().enumerate() {
+                let o = &out[16 * i..16 * i + 16];
+                let what = format!("{} steps {steps} wi {wi:?} u {u:?}", model.name);
+                let d = kernel.direction(wi, u, steps);
+                assert_eq!(
+                    o[0],
+                    if d.is_some() { 0.0 } else { 1.0 },
+                    "{what}: direction status"
+                );
+                check_dir(&what, [o[1], o[2], o[3]], d, TOL_F32, &mut e);
+                check_dir(&what, [o[9], o[10], o[11]], d, TOL_F32, &mut e);
+                let s = kernel.sample(wi, u, steps);
+                assert_eq!(
+                    o[4],
+                    if s.is_some() { 0.0 } else { 1.0 },
+                    "{what}: sample status"
+                );
+                for (wo, pdf) in [([o[5], o[6], o[7]], o[8]), ([o[12], o[13], o[14]], o[15])] {
+                    check_dir(&what, wo, s.map(|s| s.0), TOL_F32, &mut e);
+                    check_pdf(&what, pdf, s.map_or(0.0, |s| s.1), 0.0, TOL_F32, &mut e);
+                }
+            }
+            let base = 16 * samples.len();
+            for (i, &(wi, wo)) in pdfs.iter().enumerate() {
+                let what = format!("{} steps {steps} pdf wi {wi:?} wo {wo:?}", model.name);
+                let want = kernel.pdf(wi, wo, steps);
+                check_pdf(&what, out[base + 2 * i], want, 0.0, TOL_F32, &mut e);
+                check_pdf(&what, out[base + 2 * i + 1], want, 0.0, TOL_F32, &mut e);
+            }
+            println!("{} steps {steps}: {e:?}", model.name);
+            total.max_dir = total.max_dir.max(e.max_dir);
+            total.max_pdf_rel = total.max_pdf_rel.max(e.max_pdf_rel);
+            total.compared += e.compared;
+            total.valid += e.valid;
+        }
+    }
+    println!("FFI vs kernel, all models: {total:?}");
+    assert!(total.compared > 1000, "too few comparisons: {total:?}");
+    assert!(
+        total.valid * 2 > total.compared,
+        "most vectors should be valid samples: {total:?}"
+    );
+}
+
+#[test]
+fn example_program_runs() {
+    let dir = scratch("ffi_example");
+    let exe = dir.join("sample");
+    let mut cmd = Command::new("gcc");
+    cmd.args(C_FLAGS)
+        .arg("-I")
+        .arg(crate_dir().join("include"))
+        .arg(crate_dir().join("examples/sample.c"))
+        .arg(staticlib())
+        .args(["-lm", "-lpthread", "-ldl", "-o"])
+        .arg(&exe);
+    run_tool(&mut cmd, GCC_HINT);
+    // Every shipped model, or the random ones while none is shipped.
+    let shipped = shipped_models();
+    let models = if shipped.is_empty() {
+        test_models()
+    } else {
+        shipped
+    };
+    for m in models {
+        let blob = dir.join(format!("{}.bin", m.name));
+        std::fs::write(&blob, &m.blob).expect("write blob");
+        let out = run_tool(Command::new(&exe).arg(&blob), "");
+        assert!(
+            out.contains(&format!("model \"{}\"", m.name)) || !m.name.starts_with("random"),
+            "{out}"
+        );
+        assert!(out.contains("pdf"), "{out}");
+    }
+}
