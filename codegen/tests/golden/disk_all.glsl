@@ -447,7 +447,7 @@ float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, float ox, float 
         a = ta - h * v.x;
         b = tb - h * v.y;
         float step_det = 0.0;
-        for (uint it = 0u; it < 16u; it++) {
+        for (uint it = 0u; it < 32u; it++) {
             diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
             float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
             if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {

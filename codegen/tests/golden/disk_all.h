@@ -458,7 +458,7 @@ static inline float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, fl
         a = ta - h * v.x;
         b = tb - h * v.y;
         float step_det = 0.0f;
-        for (unsigned it = 0u; it < 16u; it++) {
+        for (unsigned it = 0u; it < 32u; it++) {
             diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
             float det = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
             if (!((fabsf(det) <= 3.40282347e+38f) && det > 0.0f)) {

@@ -423,7 +423,7 @@ fn diffbsdf_tiny_disk_pdf_impl(base: u32, wx: f32, wy: f32, wz: f32, ox: f32, oy
         a = ta - h * v.x;
         b = tb - h * v.y;
         var step_det: f32 = 0.0f;
-        for (var it = 0u; it < 16u; it++) {
+        for (var it = 0u; it < 32u; it++) {
             var j: diffbsdf_tiny_disk_Jac = diffbsdf_tiny_disk_velocity_jacobian(base, cond, t, a, b);
             var det: f32 = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
             if (!(((bitcast<u32>(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0f)) {

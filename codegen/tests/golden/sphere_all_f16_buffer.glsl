@@ -446,7 +446,7 @@ float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, flo
         a = ta - h * v.x;
         b = diffbsdf_tiny_sphere_wrap(tb - h * v.y);
         float step_det = 0.0;
-        for (uint it = 0u; it < 16u; it++) {
+        for (uint it = 0u; it < 32u; it++) {
             diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
             float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
             if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {
