@@ -47,9 +47,9 @@ fn hard_outgoing() -> Vec<Vec3> {
         1e-3,
         std::f32::consts::FRAC_PI_2 - 1e-6,
         std::f32::consts::FRAC_PI_2,
-        3.1415,
+        std::f32::consts::PI - 1e-4,
     ] {
-        for phi in [0.0f32, 2.0, -3.14159] {
+        for phi in [0.0f32, 2.0, -std::f32::consts::PI] {
             v.push(Vec3::new(
                 theta.sin() * phi.cos(),
                 theta.sin() * phi.sin(),
