@@ -9,7 +9,15 @@ use diffbsdf_tool::material::rgl::{RglError, RglMaterial};
 use diffbsdf_tool::material::{Material, Vec3};
 use rand::Rng;
 
-const DIR: &str = "/work/shared/data/rgl";
+/// The measured files: `shared/data/rgl/` beside the repository.
+fn data_dir() -> String {
+    let beside = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data/rgl");
+    assert!(
+        std::path::Path::new(beside).is_dir(),
+        "RGL test data missing: expected {beside} (the shared/ folder beside the repository)"
+    );
+    beside.to_string()
+}
 const FILES: [&str; 6] = [
     "aurora_white_rgb.bsdf",
     "cc_nothern_aurora_rgb.bsdf",
@@ -20,7 +28,7 @@ const FILES: [&str; 6] = [
 ];
 
 fn path(f: &str) -> String {
-    format!("{DIR}/{f}")
+    format!("{}/{f}", data_dir())
 }
 
 #[test]
