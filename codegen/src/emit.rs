@@ -193,6 +193,9 @@ impl<'a> Emitter<'a> {
             self.sample_impl();
         }
         if self.e.pdf {
+            self.residual();
+            self.newton();
+            self.invert_step();
             self.pdf_impl();
         }
     }
@@ -235,6 +238,27 @@ impl<'a> Emitter<'a> {
                 (T::F, "j11"),
             ];
             lines.extend(self.d.struct_decl(&self.p("Jac"), &f));
+        }
+        if self.e.pdf {
+            lines.push(
+                "// A Newton residual x + h v(x) - y, dv/dx and det(I + h dv/dx) at x.".into(),
+            );
+            let f = [
+                (T::F, "r0"),
+                (T::F, "r1"),
+                (T::F, "j00"),
+                (T::F, "j01"),
+                (T::F, "j10"),
+                (T::F, "j11"),
+                (T::F, "det"),
+            ];
+            lines.extend(self.d.struct_decl(&self.p("Residual"), &f));
+            lines.push(
+                "// The point x one Euler step came from, and det(I + h dv/dx(x)); det = 0: none."
+                    .into(),
+            );
+            let f = [(T::F, "a"), (T::F, "b"), (T::F, "det")];
+            lines.extend(self.d.struct_decl(&self.p("Root"), &f));
         }
         lines.push("// A direction and its PDF; all zero when invalid.".into());
         let r = [(T::F, "x"), (T::F, "y"), (T::F, "z"), (T::F, "pdf")];
@@ -1008,6 +1032,209 @@ impl<'a> Emitter<'a> {
         self.end_fn();
     }
 
+    /// Newton's tolerance: the kernel's, or the f16 one.
+    fn newton_tol(&self) -> f32 {
+        if self.d.half() {
+            NEWTON_TOL_F16
+        } else {
+            diffbsdf::NEWTON_TOL
+        }
+    }
+
+    fn step_params() -> [(T, &'static str); 4] {
+        [(T::F, "t"), (T::F, "h"), (T::F, "ya"), (T::F, "yb")]
+    }
+
+    /// The kernel's `residual`: `x + h v(x) - y` (phi difference wrapped), `dv/dx` and
+    /// `det(I + h dv/dx)` at `x = (a, b)`.
+    fn residual(&mut self) {
+        self.code
+            .line("// x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).");
+        let cond = self.st("Cond");
+        let mut ps = vec![(cond, "cond")];
+        ps.extend(Self::step_params());
+        ps.extend([(T::F, "a"), (T::F, "b")]);
+        self.fn_open(self.st("Residual"), "residual", true, &ps);
+        let j = self.call("velocity_jacobian", true, &["cond", "t", "a", "b"]);
+        self.decl(self.st("Jac"), "j", &j);
+        let decl = self.d.decl(&self.st("Residual"), "r", None);
+        self.code.line(decl);
+        self.code.line("r.r0 = (a + h * j.v0) - ya;");
+        if self.sphere() {
+            let adv = self.call("wrap", false, &["b + h * j.v1"]);
+            let dif = self.call("wrap", false, &[&format!("{adv} - yb")]);
+            self.code.line(format!("r.r1 = {dif};"));
+        } else {
+            self.code.line("r.r1 = (b + h * j.v1) - yb;");
+        }
+        for c in ["j00", "j01", "j10", "j11"] {
+            self.code.line(format!("r.{c} = j.{c};"));
+        }
+        let one = self.f(1.0);
+        self.code.line(format!(
+            "r.det = ({one} + h * j.j00) * ({one} + h * j.j11) - (h * j.j01) * (h * j.j10);"
+        ));
+        self.code.line("return r;");
+        self.end_fn();
+    }
+
+    /// The kernel's `newton`: Newton steps where `I + h dv/dx` is orientation preserving,
+    /// fixed-point steps where it is not, each with a backtracking line search.
+    fn newton(&mut self) {
+        self.code.line(
+            "// Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,",
+        );
+        self.code.line(
+            "// fixed-point steps where not, each halved (at most 8 times) until the residual shrinks.",
+        );
+        let cond = self.st("Cond");
+        let root = self.st("Root");
+        let mut ps = vec![(cond, "cond")];
+        ps.extend(Self::step_params());
+        ps.extend([(T::F, "xa"), (T::F, "xb")]);
+        self.fn_open(root.clone(), "newton", true, &ps);
+        let zero = self.f(0.0);
+        let one = self.f(1.0);
+        let tol = self.f(self.newton_tol());
+        let decl = self.d.decl(&root, "x", None);
+        self.code.line(decl);
+        self.code.line(format!("x.a = {zero};"));
+        self.code.line(format!("x.b = {zero};"));
+        self.code.line(format!("x.det = {zero};"));
+        self.decl(T::F, "a", "xa");
+        self.decl(T::F, "b", "xb");
+        let res = self.call("residual", true, &["cond", "t", "h", "ya", "yb", "a", "b"]);
+        self.decl(self.st("Residual"), "at", &res);
+        let abs = |s: &Self, x: &str| s.math(Math::Abs, x);
+        let mx = self.d.math(Math::Max);
+        self.for_open("it", &self.u(diffbsdf::NEWTON_MAX_ITERS as usize));
+        self.decl(T::F, "d0", "at.r0");
+        self.decl(T::F, "d1", "at.r1");
+        self.code.open(format!("if (at.det > {zero}) {{"));
+        self.code.line("// d = (I + h J)^-1 r by the 2x2 adjugate.");
+        self.code.line(format!(
+            "d0 = (({one} + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;"
+        ));
+        self.code.line(format!(
+            "d1 = (({one} + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;"
+        ));
+        self.code.close("}");
+        let size = format!("{mx}({}, {})", abs(self, "d0"), abs(self, "d1"));
+        self.decl(T::F, "size", &size);
+        self.code
+            .open(format!("if (!{}) {{", self.d.finite("size")));
+        self.code.line("return x;");
+        self.code.close("}");
+        let scale = format!("{one} + {mx}({}, {})", abs(self, "a"), abs(self, "b"));
+        self.decl(T::F, "scale", &scale);
+        self.code.open(format!("if (size <= {tol} * scale) {{"));
+        self.code
+            .line("// Converged: the update is below the f32 noise of x + h v(x).");
+        self.code.open(format!("if (at.det > {zero}) {{"));
+        self.code.line("x.a = a - d0;");
+        if self.sphere() {
+            let w = self.call("wrap", false, &["b - d1"]);
+            self.code.line(format!("x.b = {w};"));
+        } else {
+            self.code.line("x.b = b - d1;");
+        }
+        self.code.line("x.det = at.det;");
+        self.code.close("}");
+        self.code.line("return x;");
+        self.code.close("}");
+        let norm = format!("{mx}({}, {})", abs(self, "at.r0"), abs(self, "at.r1"));
+        self.decl(T::F, "norm", &norm);
+        self.decl(T::F, "lambda", &one);
+        self.for_open("ls", "8u");
+        self.decl(T::F, "ta", "a - lambda * d0");
+        if self.sphere() {
+            let w = self.call("wrap", false, &["b - lambda * d1"]);
+            self.decl(T::F, "tb", &w);
+        } else {
+            self.decl(T::F, "tb", "b - lambda * d1");
+        }
+        let res = self.call(
+            "residual",
+            true,
+            &["cond", "t", "h", "ya", "yb", "ta", "tb"],
+        );
+        self.code.line(format!("at = {res};"));
+        self.code.line("a = ta;");
+        self.code.line("b = tb;");
+        let next = format!("{mx}({}, {})", abs(self, "at.r0"), abs(self, "at.r1"));
+        self.code.open(format!("if ({next} < norm) {{"));
+        self.code.line("break;");
+        self.code.close("}");
+        self.code
+            .line(format!("lambda = lambda * {};", self.f(0.5)));
+        self.code.close("}");
+        self.code.open(format!(
+            "if (lambda * size <= {tol} * scale && at.det > {zero}) {{"
+        ));
+        self.code
+            .line("// The step just taken was below the noise: converged here.");
+        self.code.line("x.a = a;");
+        self.code.line("x.b = b;");
+        self.code.line("x.det = at.det;");
+        self.code.line("return x;");
+        self.code.close("}");
+        self.code.close("}");
+        self.code.line("return x;");
+        self.end_fn();
+    }
+
+    /// The kernel's `invert_step`: Newton from `y - h v(y)`, then (rarely needed) from one
+    /// fixed-point iterate further and from `y - h v(y) / 2`.
+    fn invert_step(&mut self) {
+        self.code.line(
+            "// The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point",
+        );
+        self.code
+            .line("// iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).");
+        let cond = self.st("Cond");
+        let root = self.st("Root");
+        let mut ps = vec![(cond, "cond")];
+        ps.extend(Self::step_params());
+        self.fn_open(root.clone(), "invert_step", true, &ps);
+        let zero = self.f(0.0);
+        let v = self.call("velocity", true, &["cond", "t", "ya", "yb"]);
+        self.decl(self.st("Vec2"), "v", &v);
+        let start = |s: &Self, scale: &str, vv: &str| -> (String, String) {
+            let a = format!("ya - {scale}h * {vv}.x");
+            let b = if s.sphere() {
+                s.call("wrap", false, &[&format!("yb - {scale}h * {vv}.y")])
+            } else {
+                format!("yb - {scale}h * {vv}.y")
+            };
+            (a, b)
+        };
+        let (a0, b0) = start(self, "", "v");
+        self.decl(T::F, "a0", &a0);
+        self.decl(T::F, "b0", &b0);
+        let n0 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a0", "b0"]);
+        self.decl(root.clone(), "x", &n0);
+        self.code.open(format!("if (x.det > {zero}) {{"));
+        self.code.line("return x;");
+        self.code.close("}");
+        let v1 = self.call("velocity", true, &["cond", "t", "a0", "b0"]);
+        self.decl(self.st("Vec2"), "v1", &v1);
+        let (a1, b1) = start(self, "", "v1");
+        self.decl(T::F, "a1", &a1);
+        self.decl(T::F, "b1", &b1);
+        let n1 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a1", "b1"]);
+        self.code.line(format!("x = {n1};"));
+        self.code.open(format!("if (x.det > {zero}) {{"));
+        self.code.line("return x;");
+        self.code.close("}");
+        let half = format!("{} * ", self.f(0.5));
+        let (a2, b2) = start(self, &half, "v");
+        self.decl(T::F, "a2", &a2);
+        self.decl(T::F, "b2", &b2);
+        let n2 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a2", "b2"]);
+        self.code.line(format!("return {n2};"));
+        self.end_fn();
+    }
+
     fn pdf_impl(&mut self) {
         let zero = self.f(0.0);
         let fail = format!("return {zero};");
@@ -1050,83 +1277,20 @@ impl<'a> Emitter<'a> {
         self.prologue(false, &fail);
         self.start_point("ya", "yb");
         self.decl(T::F, "ln_det", &zero);
-        let tol = if self.d.half() {
-            NEWTON_TOL_F16
-        } else {
-            diffbsdf::NEWTON_TOL
-        };
         self.for_open("kk", "n");
         self.decl(T::U, "k", "n - 1u - kk");
         let t = format!("{} * h", self.d.cast(&T::F, "k"));
         self.decl(T::F, "t", &t);
-        self.decl(T::F, "ta", "a");
-        self.decl(T::F, "tb", "b");
-        let v = self.call("velocity", true, &["cond", "t", "ta", "tb"]);
-        self.decl(self.st("Vec2"), "v", &v);
-        self.code.line("a = ta - h * v.x;");
-        if self.sphere() {
-            self.code.line(format!(
-                "b = {};",
-                self.call("wrap", false, &["tb - h * v.y"])
-            ));
-        } else {
-            self.code.line("b = tb - h * v.y;");
-        }
-        self.decl(T::F, "step_det", &zero);
-        self.for_open("it", &self.u(diffbsdf::NEWTON_MAX_ITERS as usize));
-        let j = self.call("velocity_jacobian", true, &["cond", "t", "a", "b"]);
-        self.decl(self.st("Jac"), "j", &j);
-        self.det_line();
-        self.code.open(format!(
-            "if (!({} && det > {zero})) {{",
-            self.d.finite("det")
-        ));
+        let root = self.call("invert_step", true, &["cond", "t", "h", "a", "b"]);
+        self.decl(self.st("Root"), "x", &root);
+        self.code.open(format!("if (!(x.det > {zero})) {{"));
         self.code.line(&fail);
         self.code.close("}");
-        self.decl(T::F, "r0", "(a + h * j.v0) - ta");
-        if self.sphere() {
-            let adv = self.call("wrap", false, &["b + h * j.v1"]);
-            let dif = self.call("wrap", false, &[&format!("{adv} - tb")]);
-            self.decl(T::F, "r1", &dif);
-        } else {
-            self.decl(T::F, "r1", "(b + h * j.v1) - tb");
-        }
-        let one = self.f(1.0);
-        self.decl(T::F, "a00", &format!("{one} + h * j.j00"));
-        self.decl(T::F, "a01", "h * j.j01");
-        self.decl(T::F, "a10", "h * j.j10");
-        self.decl(T::F, "a11", &format!("{one} + h * j.j11"));
-        self.decl(T::F, "d0", "(a11 * r0 - a01 * r1) / det");
-        self.decl(T::F, "d1", "(a00 * r1 - a10 * r0) / det");
-        self.code.line("a = a - d0;");
-        if self.sphere() {
-            self.code
-                .line(format!("b = {};", self.call("wrap", false, &["b - d1"])));
-        } else {
-            self.code.line("b = b - d1;");
-        }
-        let abs = |s: &Self, x: &str| s.math(Math::Abs, x);
-        let mx = self.d.math(Math::Max);
-        let scale = format!("{one} + {mx}({}, {})", abs(self, "a"), abs(self, "b"));
-        self.decl(T::F, "scale", &scale);
-        let size = format!("{mx}({}, {})", abs(self, "d0"), abs(self, "d1"));
-        self.decl(T::F, "size", &size);
-        self.code
-            .open(format!("if (size <= {} * scale) {{", self.f(tol)));
-        self.code.line("step_det = det;");
-        self.code.line("break;");
-        self.code.close("}");
-        self.code
-            .open(format!("if (!{}) {{", self.d.finite("size")));
-        self.code.line(&fail);
-        self.code.close("}");
-        self.code.close("}");
-        self.code.open(format!("if (!(step_det > {zero})) {{"));
-        self.code.line(&fail);
-        self.code.close("}");
+        self.code.line("a = x.a;");
+        self.code.line("b = x.b;");
         self.code.line(format!(
             "ln_det = ln_det + {};",
-            self.math(Math::Log, "step_det")
+            self.math(Math::Log, "x.det")
         ));
         self.code.close("}");
         let lp = self.call("base_ln_pdf", false, &["cond", "a", "b"]);

@@ -22,15 +22,18 @@
 #![forbid(unsafe_code)]
 
 mod c;
+pub mod cli;
 pub mod code;
 pub mod desc;
 pub mod dialect;
 mod emit;
 mod glsl;
+pub mod set;
 mod wgsl;
 
 use core::fmt;
 pub use desc::ModelDesc;
+pub use set::{generate_set, GroupBuffer, Material, SetCode};
 
 /// Target language.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

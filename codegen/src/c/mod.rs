@@ -1,7 +1,7 @@
 //! Standalone C99 header: every function `static inline`, no dependency beyond
 //! `<math.h>`, valid C++ as well. f32 only.
 
-mod keywords;
+pub(crate) mod keywords;
 
 use crate::code::{Code, Namer};
 use crate::desc::ModelDesc;

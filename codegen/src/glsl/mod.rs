@@ -2,7 +2,7 @@
 //! `GL_EXT_shader_explicit_arithmetic_types_float16` (the file enables it; include it
 //! before other declarations of the shader).
 
-mod keywords;
+pub(crate) mod keywords;
 
 use crate::code::{Code, Namer};
 use crate::desc::ModelDesc;

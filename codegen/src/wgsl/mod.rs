@@ -1,7 +1,7 @@
 //! WGSL output: functions to paste into (or concatenate with) a WGSL module. f16 output
 //! starts with `enable f16;` (the device needs the `shader-f16` feature).
 
-mod keywords;
+pub(crate) mod keywords;
 
 use crate::code::{Code, Namer};
 use crate::desc::ModelDesc;

@@ -38,6 +38,22 @@ struct diffbsdf_tiny_disk_Jac {
     j10: f32,
     j11: f32,
 }
+// A Newton residual x + h v(x) - y, dv/dx and det(I + h dv/dx) at x.
+struct diffbsdf_tiny_disk_Residual {
+    r0: f32,
+    r1: f32,
+    j00: f32,
+    j01: f32,
+    j10: f32,
+    j11: f32,
+    det: f32,
+}
+// The point x one Euler step came from, and det(I + h dv/dx(x)); det = 0: none.
+struct diffbsdf_tiny_disk_Root {
+    a: f32,
+    b: f32,
+    det: f32,
+}
 // A direction and its PDF; all zero when invalid.
 struct diffbsdf_tiny_disk_Result {
     x: f32,
@@ -389,6 +405,98 @@ fn diffbsdf_tiny_disk_sample_impl(base: u32, wx: f32, wy: f32, wz: f32, u0: f32,
     return r;
 }
 
+// x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).
+fn diffbsdf_tiny_disk_residual(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32, a: f32, b: f32) -> diffbsdf_tiny_disk_Residual {
+    var j: diffbsdf_tiny_disk_Jac = diffbsdf_tiny_disk_velocity_jacobian(base, cond, t, a, b);
+    var r: diffbsdf_tiny_disk_Residual;
+    r.r0 = (a + h * j.v0) - ya;
+    r.r1 = (b + h * j.v1) - yb;
+    r.j00 = j.j00;
+    r.j01 = j.j01;
+    r.j10 = j.j10;
+    r.j11 = j.j11;
+    r.det = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
+    return r;
+}
+
+// Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,
+// fixed-point steps where not, each halved (at most 8 times) until the residual shrinks.
+fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32, xa: f32, xb: f32) -> diffbsdf_tiny_disk_Root {
+    var x: diffbsdf_tiny_disk_Root;
+    x.a = 0.0f;
+    x.b = 0.0f;
+    x.det = 0.0f;
+    var a: f32 = xa;
+    var b: f32 = xb;
+    var at: diffbsdf_tiny_disk_Residual = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, a, b);
+    for (var it = 0u; it < 32u; it++) {
+        var d0: f32 = at.r0;
+        var d1: f32 = at.r1;
+        if (at.det > 0.0f) {
+            // d = (I + h J)^-1 r by the 2x2 adjugate.
+            d0 = ((1.0f + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;
+            d1 = ((1.0f + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;
+        }
+        var size: f32 = max(abs(d0), abs(d1));
+        if (!((bitcast<u32>(size) & 0x7f800000u) != 0x7f800000u)) {
+            return x;
+        }
+        var scale: f32 = 1.0f + max(abs(a), abs(b));
+        if (size <= 1e-6f * scale) {
+            // Converged: the update is below the f32 noise of x + h v(x).
+            if (at.det > 0.0f) {
+                x.a = a - d0;
+                x.b = b - d1;
+                x.det = at.det;
+            }
+            return x;
+        }
+        var norm: f32 = max(abs(at.r0), abs(at.r1));
+        var lambda: f32 = 1.0f;
+        for (var ls = 0u; ls < 8u; ls++) {
+            var ta: f32 = a - lambda * d0;
+            var tb: f32 = b - lambda * d1;
+            at = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, ta, tb);
+            a = ta;
+            b = tb;
+            if (max(abs(at.r0), abs(at.r1)) < norm) {
+                break;
+            }
+            lambda = lambda * 0.5f;
+        }
+        if (lambda * size <= 1e-6f * scale && at.det > 0.0f) {
+            // The step just taken was below the noise: converged here.
+            x.a = a;
+            x.b = b;
+            x.det = at.det;
+            return x;
+        }
+    }
+    return x;
+}
+
+// The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point
+// iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).
+fn diffbsdf_tiny_disk_invert_step(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32) -> diffbsdf_tiny_disk_Root {
+    var v: diffbsdf_tiny_disk_Vec2 = diffbsdf_tiny_disk_velocity(base, cond, t, ya, yb);
+    var a0: f32 = ya - h * v.x;
+    var b0: f32 = yb - h * v.y;
+    var x: diffbsdf_tiny_disk_Root = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, a0, b0);
+    if (x.det > 0.0f) {
+        return x;
+    }
+    var v1: diffbsdf_tiny_disk_Vec2 = diffbsdf_tiny_disk_velocity(base, cond, t, a0, b0);
+    var a1: f32 = ya - h * v1.x;
+    var b1: f32 = yb - h * v1.y;
+    x = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, a1, b1);
+    if (x.det > 0.0f) {
+        return x;
+    }
+    var a2: f32 = ya - 0.5f * h * v.x;
+    var b2: f32 = yb - 0.5f * h * v.y;
+    return diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, a2, b2);
+}
+
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's
 // method on x + h v(x) = y, starting from y - h v(y).
 fn diffbsdf_tiny_disk_pdf_impl(base: u32, wx: f32, wy: f32, wz: f32, ox: f32, oy: f32, oz: f32, steps: u32) -> f32 {
@@ -417,42 +525,13 @@ fn diffbsdf_tiny_disk_pdf_impl(base: u32, wx: f32, wy: f32, wz: f32, ox: f32, oy
     for (var kk = 0u; kk < n; kk++) {
         var k: u32 = n - 1u - kk;
         var t: f32 = f32(k) * h;
-        var ta: f32 = a;
-        var tb: f32 = b;
-        var v: diffbsdf_tiny_disk_Vec2 = diffbsdf_tiny_disk_velocity(base, cond, t, ta, tb);
-        a = ta - h * v.x;
-        b = tb - h * v.y;
-        var step_det: f32 = 0.0f;
-        for (var it = 0u; it < 32u; it++) {
-            var j: diffbsdf_tiny_disk_Jac = diffbsdf_tiny_disk_velocity_jacobian(base, cond, t, a, b);
-            var det: f32 = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
-            if (!(((bitcast<u32>(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0f)) {
-                return 0.0f;
-            }
-            var r0: f32 = (a + h * j.v0) - ta;
-            var r1: f32 = (b + h * j.v1) - tb;
-            var a00: f32 = 1.0f + h * j.j00;
-            var a01: f32 = h * j.j01;
-            var a10: f32 = h * j.j10;
-            var a11: f32 = 1.0f + h * j.j11;
-            var d0: f32 = (a11 * r0 - a01 * r1) / det;
-            var d1: f32 = (a00 * r1 - a10 * r0) / det;
-            a = a - d0;
-            b = b - d1;
-            var scale: f32 = 1.0f + max(abs(a), abs(b));
-            var size: f32 = max(abs(d0), abs(d1));
-            if (size <= 1e-6f * scale) {
-                step_det = det;
-                break;
-            }
-            if (!((bitcast<u32>(size) & 0x7f800000u) != 0x7f800000u)) {
-                return 0.0f;
-            }
-        }
-        if (!(step_det > 0.0f)) {
+        var x: diffbsdf_tiny_disk_Root = diffbsdf_tiny_disk_invert_step(base, cond, t, h, a, b);
+        if (!(x.det > 0.0f)) {
             return 0.0f;
         }
-        ln_det = ln_det + log(step_det);
+        a = x.a;
+        b = x.b;
+        ln_det = ln_det + log(x.det);
     }
     var pdf: f32 = exp(diffbsdf_tiny_disk_base_ln_pdf(cond, a, b) - ln_det + log(wo.z));
     if (!((bitcast<u32>(pdf) & 0x7f800000u) != 0x7f800000u)) {

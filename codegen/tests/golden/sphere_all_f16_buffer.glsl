@@ -43,6 +43,22 @@ struct diffbsdf_tiny_sphere_Jac {
     float j10;
     float j11;
 };
+// A Newton residual x + h v(x) - y, dv/dx and det(I + h dv/dx) at x.
+struct diffbsdf_tiny_sphere_Residual {
+    float r0;
+    float r1;
+    float j00;
+    float j01;
+    float j10;
+    float j11;
+    float det;
+};
+// The point x one Euler step came from, and det(I + h dv/dx(x)); det = 0: none.
+struct diffbsdf_tiny_sphere_Root {
+    float a;
+    float b;
+    float det;
+};
 // A direction and its PDF; all zero when invalid.
 struct diffbsdf_tiny_sphere_Result {
     float x;
@@ -411,6 +427,98 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx
     return r;
 }
 
+// x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).
+diffbsdf_tiny_sphere_Residual diffbsdf_tiny_sphere_residual(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float a, float b) {
+    diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
+    diffbsdf_tiny_sphere_Residual r;
+    r.r0 = (a + h * j.v0) - ya;
+    r.r1 = diffbsdf_tiny_sphere_wrap(diffbsdf_tiny_sphere_wrap(b + h * j.v1) - yb);
+    r.j00 = j.j00;
+    r.j01 = j.j01;
+    r.j10 = j.j10;
+    r.j11 = j.j11;
+    r.det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
+    return r;
+}
+
+// Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,
+// fixed-point steps where not, each halved (at most 8 times) until the residual shrinks.
+diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float xa, float xb) {
+    diffbsdf_tiny_sphere_Root x;
+    x.a = 0.0;
+    x.b = 0.0;
+    x.det = 0.0;
+    float a = xa;
+    float b = xb;
+    diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, a, b);
+    for (uint it = 0u; it < 32u; it++) {
+        float d0 = at.r0;
+        float d1 = at.r1;
+        if (at.det > 0.0) {
+            // d = (I + h J)^-1 r by the 2x2 adjugate.
+            d0 = ((1.0 + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;
+            d1 = ((1.0 + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;
+        }
+        float size = max(abs(d0), abs(d1));
+        if (!((floatBitsToUint(size) & 0x7f800000u) != 0x7f800000u)) {
+            return x;
+        }
+        float scale = 1.0 + max(abs(a), abs(b));
+        if (size <= 0.002 * scale) {
+            // Converged: the update is below the f32 noise of x + h v(x).
+            if (at.det > 0.0) {
+                x.a = a - d0;
+                x.b = diffbsdf_tiny_sphere_wrap(b - d1);
+                x.det = at.det;
+            }
+            return x;
+        }
+        float norm = max(abs(at.r0), abs(at.r1));
+        float lambda = 1.0;
+        for (uint ls = 0u; ls < 8u; ls++) {
+            float ta = a - lambda * d0;
+            float tb = diffbsdf_tiny_sphere_wrap(b - lambda * d1);
+            at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, ta, tb);
+            a = ta;
+            b = tb;
+            if (max(abs(at.r0), abs(at.r1)) < norm) {
+                break;
+            }
+            lambda = lambda * 0.5;
+        }
+        if (lambda * size <= 0.002 * scale && at.det > 0.0) {
+            // The step just taken was below the noise: converged here.
+            x.a = a;
+            x.b = b;
+            x.det = at.det;
+            return x;
+        }
+    }
+    return x;
+}
+
+// The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point
+// iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).
+diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb) {
+    diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, ya, yb);
+    float a0 = ya - h * v.x;
+    float b0 = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
+    diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a0, b0);
+    if (x.det > 0.0) {
+        return x;
+    }
+    diffbsdf_tiny_sphere_Vec2 v1 = diffbsdf_tiny_sphere_velocity(base, cond, t, a0, b0);
+    float a1 = ya - h * v1.x;
+    float b1 = diffbsdf_tiny_sphere_wrap(yb - h * v1.y);
+    x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a1, b1);
+    if (x.det > 0.0) {
+        return x;
+    }
+    float a2 = ya - 0.5 * h * v.x;
+    float b2 = diffbsdf_tiny_sphere_wrap(yb - 0.5 * h * v.y);
+    return diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a2, b2);
+}
+
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's
 // method on x + h v(x) = y, starting from y - h v(y).
 float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, float ox, float oy, float oz, uint steps) {
@@ -440,42 +548,13 @@ float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, flo
     for (uint kk = 0u; kk < n; kk++) {
         uint k = n - 1u - kk;
         float t = float(k) * h;
-        float ta = a;
-        float tb = b;
-        diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, ta, tb);
-        a = ta - h * v.x;
-        b = diffbsdf_tiny_sphere_wrap(tb - h * v.y);
-        float step_det = 0.0;
-        for (uint it = 0u; it < 32u; it++) {
-            diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
-            float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
-            if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {
-                return 0.0;
-            }
-            float r0 = (a + h * j.v0) - ta;
-            float r1 = diffbsdf_tiny_sphere_wrap(diffbsdf_tiny_sphere_wrap(b + h * j.v1) - tb);
-            float a00 = 1.0 + h * j.j00;
-            float a01 = h * j.j01;
-            float a10 = h * j.j10;
-            float a11 = 1.0 + h * j.j11;
-            float d0 = (a11 * r0 - a01 * r1) / det;
-            float d1 = (a00 * r1 - a10 * r0) / det;
-            a = a - d0;
-            b = diffbsdf_tiny_sphere_wrap(b - d1);
-            float scale = 1.0 + max(abs(a), abs(b));
-            float size = max(abs(d0), abs(d1));
-            if (size <= 0.002 * scale) {
-                step_det = det;
-                break;
-            }
-            if (!((floatBitsToUint(size) & 0x7f800000u) != 0x7f800000u)) {
-                return 0.0;
-            }
-        }
-        if (!(step_det > 0.0)) {
+        diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_invert_step(base, cond, t, h, a, b);
+        if (!(x.det > 0.0)) {
             return 0.0;
         }
-        ln_det = ln_det + log(step_det);
+        a = x.a;
+        b = x.b;
+        ln_det = ln_det + log(x.det);
     }
     float pdf = exp(diffbsdf_tiny_sphere_base_ln_pdf(cond, a, b) - ln_det + -log(sin(ya)));
     if (!((floatBitsToUint(pdf) & 0x7f800000u) != 0x7f800000u)) {

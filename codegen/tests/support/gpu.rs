@@ -101,10 +101,24 @@ impl Gpu {
         unsafe { self.device.create_shader_module_passthrough(desc) }
     }
 
-    /// Runs `main` over `inputs` (two vec4 per item), returns two vec4 per item.
+    /// The compute pipeline of `module`'s `main`: the driver compiles the shader here,
+    /// once, however many times it then runs.
+    pub fn pipeline(&self, module: &wgpu::ShaderModule) -> wgpu::ComputePipeline {
+        self.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: None,
+                layout: Some(&self.layout),
+                module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+    }
+
+    /// Runs `pipeline` over `inputs` (two vec4 per item), returns two vec4 per item.
     pub fn run(
         &self,
-        module: &wgpu::ShaderModule,
+        pipeline: &wgpu::ComputePipeline,
         params: &[f32],
         inputs: &[[f32; 4]],
     ) -> Vec<[f32; 4]> {
@@ -140,14 +154,6 @@ impl Gpu {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: None,
-            layout: Some(&self.layout),
-            module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
         let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &self.bgl,
@@ -172,7 +178,7 @@ impl Gpu {
                 label: None,
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
             let items = inputs.len() / 2;
             pass.dispatch_workgroups(items.div_ceil(64) as u32, 1, 1);
