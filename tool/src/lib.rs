@@ -14,4 +14,5 @@ pub mod cli;
 pub mod data;
 pub mod material;
 pub mod metrics;
+pub mod tradeoff;
 pub mod train;

@@ -2,6 +2,7 @@
 //! trains a sampler for a material and writes its blob (f32 at `--out`, f16 beside it as
 //! `<stem>.f16.dbsdf`), then measures its quality unless `--no-eval`.
 
+use super::choose::{fewest_steps, Candidate, Criteria};
 use crate::material::{parse_spec, SpecError};
 use crate::metrics::{evaluate, table, EvalConfig, Report};
 use crate::train::{fit_material, FitConfig, Progress, StageReport, TrainError};
@@ -20,13 +21,19 @@ pub enum DomainArg {
     Disk,
     /// (theta, phi) over the sphere (full BSDFs, grazing specular BRDFs).
     Sphere,
+    /// The disk where it suffices; the sphere for transmissive materials, or when the
+    /// disk model misses `--max-grazing-firefly` or `--target-rv`.
+    Auto,
 }
 
-impl From<DomainArg> for Domain {
-    fn from(d: DomainArg) -> Self {
-        match d {
-            DomainArg::Disk => Domain::Disk,
-            DomainArg::Sphere => Domain::Sphere,
+impl DomainArg {
+    /// The domains to try, cheapest first.
+    pub fn candidates(self, material: &dyn crate::material::Material) -> Vec<Domain> {
+        match self {
+            DomainArg::Disk => vec![Domain::Disk],
+            DomainArg::Sphere => vec![Domain::Sphere],
+            DomainArg::Auto if material.is_transmissive() => vec![Domain::Sphere],
+            DomainArg::Auto => vec![Domain::Disk, Domain::Sphere],
         }
     }
 }
@@ -39,6 +46,18 @@ pub struct FitArgs {
     /// Flow domain.
     #[arg(long, value_enum, default_value = "disk")]
     pub domain: DomainArg,
+    /// Mean RV to reach: the blob's default steps become the fewest of 1, 2, 4, ..., 32
+    /// that reach it (with every step invertible); with `--domain auto` a disk model that
+    /// cannot reach it gives way to a sphere model.
+    #[arg(long)]
+    pub target_rv: Option<f64>,
+    /// With `--domain auto`: the largest firefly ratio (99.99th percentile of w / E[w])
+    /// allowed at grazing wi (theta_i >= 85 deg) before the sphere is used instead.
+    #[arg(long, default_value_t = 20.0)]
+    pub max_grazing_firefly: f64,
+    /// Samples per wi of the `--domain auto` / `--target-rv` checks.
+    #[arg(long, default_value_t = 1 << 14)]
+    pub check_samples: usize,
     /// Euler steps of the student (default 4 on the disk, 8 on the sphere).
     #[arg(long)]
     pub steps: Option<u16>,
@@ -125,6 +144,10 @@ pub enum CommandError {
     Json(String),
     /// Generating shader or header code failed.
     Codegen(String),
+    /// The models folder could not be read.
+    Catalog(crate::tradeoff::CatalogError),
+    /// The tradeoff sweep, its plot or its images failed.
+    Sweep(crate::tradeoff::SweepError),
 }
 
 impl fmt::Display for CommandError {
@@ -136,6 +159,8 @@ impl fmt::Display for CommandError {
             CommandError::Output(e) => write!(f, "write failed: {e}"),
             CommandError::Json(e) => write!(f, "JSON encoding failed: {e}"),
             CommandError::Codegen(e) => write!(f, "{e}"),
+            CommandError::Catalog(e) => write!(f, "{e}"),
+            CommandError::Sweep(e) => write!(f, "{e}"),
         }
     }
 }
@@ -211,6 +236,8 @@ pub struct FitOutput {
     pub stages: Vec<StageReport>,
     /// Quality report.
     pub report: Option<Report>,
+    /// The `--domain auto` / `--target-rv` checks, in order, if any were made.
+    pub choice: Vec<Candidate>,
 }
 
 /// The f16 blob's path beside `out`.
@@ -236,9 +263,8 @@ pub fn print_json<T: Serialize>(
     writeln!(out, "{s}").map_err(CommandError::Output)
 }
 
-/// The fit configuration the arguments ask for.
-pub fn config(args: &FitArgs) -> FitConfig {
-    let domain = Domain::from(args.domain);
+/// The fit configuration the arguments ask for, on `domain`.
+pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     let mut c = if args.tiny {
         FitConfig::tiny(domain, args.seed)
     } else {
@@ -275,10 +301,50 @@ pub fn config(args: &FitArgs) -> FitConfig {
     c
 }
 
+/// Trains on each candidate domain in turn (cheapest first) until one is sufficient;
+/// returns the fit kept and the checks made (none without `--domain auto` or
+/// `--target-rv`).
+fn fit_choosing(
+    args: &FitArgs,
+    material: &dyn crate::material::Material,
+    name: &str,
+) -> Result<(crate::train::Fitted, Vec<Candidate>), CommandError> {
+    let choosing = args.domain == DomainArg::Auto || args.target_rv.is_some();
+    let criteria = Criteria {
+        target_rv: args.target_rv,
+        max_grazing_firefly: if args.domain == DomainArg::Auto {
+            args.max_grazing_firefly
+        } else {
+            f64::INFINITY
+        },
+        samples: args.check_samples,
+    };
+    let mut domains = args.domain.candidates(material).into_iter();
+    let mut domain = domains.next().unwrap_or(Domain::Sphere);
+    let mut checks = Vec::new();
+    loop {
+        let bars = Bars::default();
+        let mut fitted = fit_material(material, name, &config(args, domain), &bars)?;
+        if !choosing {
+            return Ok((fitted, checks));
+        }
+        let (pick, tried) = fewest_steps(&fitted.model, material, &criteria);
+        checks.extend(tried);
+        match (pick, domains.next()) {
+            (Some(p), _) => {
+                fitted.model = fitted.model.with_steps(p.steps);
+                return Ok((fitted, checks));
+            }
+            (None, Some(next)) => domain = next,
+            // Nothing sufficed: the most capable domain at its trained steps.
+            (None, None) => return Ok((fitted, checks)),
+        }
+    }
+}
+
 /// Runs `diffbsdf fit`.
 pub fn run(args: FitArgs, out: &mut dyn std::io::Write) -> Result<(), CommandError> {
     let material = parse_spec(&args.spec).map_err(CommandError::Spec)?;
-    let cfg = config(&args);
     let name = args.name.clone().unwrap_or_else(|| {
         let stem = args
             .out
@@ -287,8 +353,7 @@ pub fn run(args: FitArgs, out: &mut dyn std::io::Write) -> Result<(), CommandErr
             .unwrap_or("model");
         stem.chars().take(32).collect()
     });
-    let bars = Bars::default();
-    let mut fitted = fit_material(material.as_ref(), &name, &cfg, &bars)?;
+    let (mut fitted, choice) = fit_choosing(&args, material.as_ref(), &name)?;
     if let Some(n) = args.export_steps {
         fitted.model = fitted.model.with_steps(n.max(1));
     }
@@ -318,6 +383,7 @@ pub fn run(args: FitArgs, out: &mut dyn std::io::Write) -> Result<(), CommandErr
                 pairs: fitted.pairs,
                 stages: fitted.stages,
                 report,
+                choice,
             },
             out,
         );
@@ -336,6 +402,17 @@ pub fn run(args: FitArgs, out: &mut dyn std::io::Write) -> Result<(), CommandErr
         text += &format!(
             "  {:<8} {:>7.1} s  loss {:.5} -> {:.5}\n",
             s.stage, s.seconds, s.loss_start, s.loss_end
+        );
+    }
+    for c in &choice {
+        text += &format!(
+            "  checked {:<6} N={:<2}: mean RV {:.4}, grazing firefly {:.1}, det<=0 {:.4} % -> {}\n",
+            c.domain,
+            c.steps,
+            c.rv_mean,
+            c.grazing_firefly,
+            100.0 * c.non_positive_det,
+            if c.sufficient { "sufficient" } else { "short" }
         );
     }
     if let Some(r) = &report {

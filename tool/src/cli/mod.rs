@@ -1,11 +1,13 @@
 //! The `diffbsdf` command line. Each top-level subcommand lives in its own file and adds
 //! one variant to [`Command`]; [`run`] dispatches.
 
+pub mod choose;
 pub mod codegen;
 pub mod demo;
 pub mod eval;
 pub mod fit;
 pub mod material;
+pub mod tradeoff;
 
 use clap::{Parser, Subcommand};
 
@@ -34,6 +36,8 @@ pub enum Command {
     Demo(demo::DemoArgs),
     /// GLSL, WGSL or a standalone C header from a blob.
     Codegen(codegen::CodegenArgs),
+    /// What accuracy costs in time: the shipped models over steps and precision.
+    Tradeoff(tradeoff::TradeoffArgs),
 }
 
 /// Errors the command line reports before exiting with a failure status.
@@ -66,6 +70,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), CliError> {
         Command::Fit(a) => fit::run(*a, out).map_err(CliError::Train),
         Command::Eval(a) => eval::run(a, out).map_err(CliError::Train),
         Command::Demo(a) => demo::run(a, out).map_err(CliError::Train),
-        Command::Codegen(a) => codegen::run(a, out).map_err(CliError::Codegen),
+        Command::Codegen(a) => codegen::run(&a, out).map_err(CliError::Codegen),
+        Command::Tradeoff(a) => tradeoff::run(a, out).map_err(CliError::Train),
     }
 }

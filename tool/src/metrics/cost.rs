@@ -6,12 +6,12 @@ use super::sampler::to_glam;
 use crate::material::{Material, Vec3};
 use crate::train::LearnedModel;
 use diffbsdf::glam::Vec2;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::hint::black_box;
 use std::time::Instant;
 
 /// Nanoseconds per call.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 pub struct Cost {
     /// Learned: direction only.
     pub learned_direction_ns: f64,
