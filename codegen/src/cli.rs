@@ -1,7 +1,7 @@
 //! The command line shared by `diffbsdf-codegen` and `diffbsdf codegen` (clap).
 
 use crate::set::{generate_set, Material};
-use crate::{generate, EntryPoints, Float, Language, ModelDesc, Options, Weights};
+use crate::{generate_from, EntryPoints, Float, Language, ModelDesc, Options, Weights};
 use clap::{Args, ValueEnum};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -143,7 +143,8 @@ fn code_of(args: &CodegenArgs) -> Result<(String, Vec<crate::GroupBuffer>), Code
         let blob = read(one)?;
         let desc =
             ModelDesc::from_blob(&blob).map_err(|e| CodegenError::Generate(one.clone(), e))?;
-        let code = generate(&blob, &options).map_err(|e| CodegenError::Generate(one.clone(), e))?;
+        let code =
+            generate_from(&desc, &options).map_err(|e| CodegenError::Generate(one.clone(), e))?;
         let buffers = match options.weights {
             Weights::Baked => Vec::new(),
             Weights::Buffer { binding, .. } => vec![crate::GroupBuffer {

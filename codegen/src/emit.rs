@@ -952,13 +952,15 @@ impl<'a> Emitter<'a> {
         self.end_fn();
     }
 
-    fn det_line(&mut self) {
+    /// `det(I + h dv/dx)` of the Jacobian `j`, as the kernel's `step_det` computes it.
+    fn det_expr(&self) -> String {
         let one = self.f(1.0);
-        self.decl(
-            T::F,
-            "det",
-            &format!("({one} + h * j.j00) * ({one} + h * j.j11) - (h * j.j01) * (h * j.j10)"),
-        );
+        format!("({one} + h * j.j00) * ({one} + h * j.j11) - (h * j.j01) * (h * j.j10)")
+    }
+
+    fn det_line(&mut self) {
+        let det = self.det_expr();
+        self.decl(T::F, "det", &det);
     }
 
     fn ln_measure(&self, wo_z: &str, theta: &str) -> String {
@@ -1070,10 +1072,7 @@ impl<'a> Emitter<'a> {
         for c in ["j00", "j01", "j10", "j11"] {
             self.code.line(format!("r.{c} = j.{c};"));
         }
-        let one = self.f(1.0);
-        self.code.line(format!(
-            "r.det = ({one} + h * j.j00) * ({one} + h * j.j11) - (h * j.j01) * (h * j.j10);"
-        ));
+        self.code.line(format!("r.det = {};", self.det_expr()));
         self.code.line("return r;");
         self.end_fn();
     }

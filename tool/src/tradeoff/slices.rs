@@ -6,7 +6,7 @@
 
 use super::sweep::SweepError;
 use crate::material::{Material, Vec3};
-use crate::metrics::sampler::{from_glam, to_glam};
+use crate::metrics::sampler::to_glam;
 use crate::train::LearnedModel;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -99,10 +99,7 @@ pub fn write_png(
         let wi = Vec3::from_spherical(theta.to_radians(), 0.0);
         let z = target_norm(material, wi).max(1e-300);
         let target = |wo: Vec3| (material.eval_luminance(wi, wo) * wo.z.abs()).max(0.0) / z;
-        let learned = |wo: Vec3| {
-            let wo = from_glam(to_glam(wo));
-            model.pdf(to_glam(wi), to_glam(wo)) as f64
-        };
+        let learned = |wo: Vec3| model.pdf(to_glam(wi), to_glam(wo)) as f64;
         let mut panels = Vec::new();
         for &upper in sides {
             panels.push(panel(&target, upper));
