@@ -157,12 +157,7 @@ fn plan(float: Float) -> (Vec<EntryPoints>, bool) {
     (entries, full)
 }
 
-/// The tests take turns: lavapipe already spreads one dispatch over every core, and two
-/// shader compilations at once on a 2-core machine took 2.6x as long as in turn.
-static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
 fn run_language(language: Language, float: Float) -> Errors {
-    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let gpu: Gpu = lavapipe();
     println!("device: {}", gpu.name);
     let dir = scratch(&format!("gpu_{language:?}_{float:?}"));
