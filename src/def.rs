@@ -175,6 +175,9 @@ pub struct ModelDef {
     pub velocity: NetShape,
     /// Euler steps used when the caller does not choose.
     pub default_steps: u16,
+    /// The material is unchanged by rotations about the normal: the nets see `wi` turned
+    /// into the xz-plane and samples are turned back ([`crate::frame::IncidentFrame`]).
+    pub isotropic: bool,
     pub name: ModelName,
 }
 
@@ -197,6 +200,7 @@ impl ModelDef {
                 hidden_layers: 3,
             },
             default_steps: 4,
+            isotropic: false,
             name: ModelName::EMPTY,
         }
     }

@@ -1,6 +1,9 @@
 //! Read-only views of the intermediate quantities, for tests, conformance suites and
 //! tools: the velocity and its Jacobian at a point, the base distribution, a whole
 //! trajectory and the inverse of the flow. None of this is on the sampling hot path.
+//!
+//! Flow points `x` are in the frame the nets work in: for an isotropic model, the frame
+//! turned about the normal so that `wi` has `phi = 0` ([`crate::frame::IncidentFrame`]).
 
 use crate::base::BaseDist;
 use crate::flow::{step_det, step_time};
@@ -20,7 +23,7 @@ impl<
 {
     /// `v(x, t, wi)` and the hand-derived `dv/dx` at a flow point `x`.
     pub fn velocity_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<([f32; 2], Jacobian)> {
-        let c = self.condition(unit_direction(wi)?);
+        let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         let step = self.velocity.at_time(&c.cond, t);
         let (feat, dfeat) = self.def.domain.features_with_derivative(x);
         Some(self.velocity.velocity_jacobian(&step, feat, dfeat))
@@ -28,14 +31,17 @@ impl<
 
     /// `v(x, t, wi)` alone (the direction-only path).
     pub fn velocity_only_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<[f32; 2]> {
-        let c = self.condition(unit_direction(wi)?);
+        let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         let step = self.velocity.at_time(&c.cond, t);
         Some(self.velocity.velocity(&step, self.def.domain.features(x)))
     }
 
     /// The base distribution `p0(. | wi)`.
     pub fn base_distribution(&self, wi: Vec3) -> Option<BaseDist> {
-        Some(self.condition(unit_direction(wi)?).base)
+        Some(
+            self.condition(self.incident_frame(unit_direction(wi)?).1)
+                .base,
+        )
     }
 
     /// Writes `x_0 .. x_steps` into `points` (which must hold `steps + 1` points) and
@@ -47,7 +53,7 @@ impl<
         steps: u32,
         points: &mut [[f32; 2]],
     ) -> Option<f32> {
-        let c = self.condition(unit_direction(wi)?);
+        let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         let points = points.get_mut(..steps as usize + 1)?;
         let domain = self.def.domain;
         let h = 1.0 / steps as f32;
@@ -69,7 +75,7 @@ impl<
 
     /// The flow point `x0` that `steps` Euler steps carry to `x`, by the exact inverse.
     pub fn invert_flow(&self, wi: Vec3, x: [f32; 2], steps: u32) -> Option<[f32; 2]> {
-        let c = self.condition(unit_direction(wi)?);
+        let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         self.flow_inverse(&c, x, steps).map(|(x0, _)| x0)
     }
 }

@@ -41,6 +41,7 @@ pub mod def;
 mod diagnostics;
 pub mod domain;
 mod flow;
+pub mod frame;
 pub mod input;
 pub mod math;
 mod model;

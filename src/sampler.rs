@@ -11,6 +11,7 @@
 //! leaves the domain, gives `None` (or a PDF of 0): the lost mass is never renormalised.
 
 use crate::def::Domain;
+use crate::frame::IncidentFrame;
 use crate::input::{uniform_pair, unit_direction};
 use crate::math::exp;
 use crate::model::Model;
@@ -76,9 +77,11 @@ impl<
         if steps == 0 {
             return None;
         }
+        let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
         let x = self.flow(&c, c.base.sample(u), steps);
-        self.def.domain.to_direction(x).filter(|wo| wo.is_finite())
+        let wo = self.def.domain.to_direction(x)?;
+        Some(frame.to_world(wo)).filter(|wo| wo.is_finite())
     }
 
     /// [`Model::sample`] with `steps` Euler steps (`steps >= 1`).
@@ -88,6 +91,7 @@ impl<
         if steps == 0 {
             return None;
         }
+        let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
         let x0 = c.base.sample(u);
         let (x, ln_det) = self.flow_with_ln_det(&c, x0, steps)?;
@@ -95,6 +99,7 @@ impl<
         // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (DESIGN.md, "The math")
         let ln_pdf = c.base.ln_pdf(x0) - ln_det + self.def.domain.ln_measure(x, wo);
         let pdf = exp(ln_pdf);
+        let wo = frame.to_world(wo);
         (wo.is_finite() && pdf.is_finite() && pdf > 0.0).then_some(Sample { wo, pdf })
     }
 
@@ -110,6 +115,8 @@ impl<
             return None;
         }
         let domain = self.def.domain;
+        let (frame, wi) = self.incident_frame(wi);
+        let wo = frame.to_local(wo);
         let y = domain.point_of(wo)?;
         let c = self.condition(wi);
         let (x0, ln_det) = self.flow_inverse(&c, y, steps)?;
@@ -126,5 +133,16 @@ impl<
             Domain::Disk if wi.z < 0.0 => None,
             _ => Some(wi),
         }
+    }
+
+    /// The frame the nets work in, and `wi` in it: for an isotropic model the rotation that
+    /// puts `wi` at `phi = 0`, otherwise the identity.
+    #[inline(always)]
+    pub(crate) fn incident_frame(&self, wi: Vec3) -> (IncidentFrame, Vec3) {
+        if !self.def.isotropic {
+            return (IncidentFrame::IDENTITY, wi);
+        }
+        let frame = IncidentFrame::aligning(wi);
+        (frame, frame.to_local(wi))
     }
 }

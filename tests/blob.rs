@@ -136,7 +136,9 @@ fn header_errors_behind_a_valid_checksum() {
     ));
     assert!(matches!(case(16, 0), BlobError::BadHeader(_)));
     assert!(matches!(case(21, 33), BlobError::BadHeader(_)));
-    assert!(matches!(case(28, 1), BlobError::BadHeader(_)));
+    // Flags: bit 0 (isotropic) is the only one defined.
+    assert!(matches!(case(28, 2), BlobError::BadHeader(_)));
+    assert!(matches!(case(31, 1), BlobError::BadHeader(_)));
     assert!(matches!(case(13, 9), BlobError::BadHeader(_)));
     // A sphere blob has the disk's shape but another domain: the feature count changes
     // the parameter count.

@@ -5,7 +5,9 @@ mod support;
 
 use diffbsdf::glam::Vec2;
 use proptest::prelude::*;
-use support::{direction, random_disk, random_sphere, rel};
+use support::{
+    direction, random_disk, random_isotropic_disk, random_isotropic_sphere, random_sphere, rel,
+};
 
 /// Allowed relative difference between `pdf(wi, wo)` and the sampled PDF.
 const PDF_TOL: f32 = 1e-4;
@@ -45,5 +47,15 @@ consistency!(disk_pdf_of_sample_matches_sampled_pdf, random_disk, true);
 consistency!(
     sphere_pdf_of_sample_matches_sampled_pdf,
     random_sphere,
+    false
+);
+consistency!(
+    isotropic_disk_pdf_of_sample_matches_sampled_pdf,
+    random_isotropic_disk,
+    true
+);
+consistency!(
+    isotropic_sphere_pdf_of_sample_matches_sampled_pdf,
+    random_isotropic_sphere,
     false
 );

@@ -183,6 +183,9 @@ impl<'a> Emitter<'a> {
         }
         self.none();
         self.incident();
+        if self.m.def.isotropic {
+            self.frame_fn();
+        }
         if self.needs_base_sample() {
             self.write_to_direction();
         }
@@ -259,6 +262,13 @@ impl<'a> Emitter<'a> {
             );
             let f = [(T::F, "a"), (T::F, "b"), (T::F, "det")];
             lines.extend(self.d.struct_decl(&self.p("Root"), &f));
+        }
+        if self.m.def.isotropic {
+            lines.push("// A rotation about the normal: cos and sin of its angle.".into());
+            lines.extend(
+                self.d
+                    .struct_decl(&self.p("Frame"), &[(T::F, "c"), (T::F, "s")]),
+            );
         }
         lines.push("// A direction and its PDF; all zero when invalid.".into());
         let r = [(T::F, "x"), (T::F, "y"), (T::F, "z"), (T::F, "pdf")];
@@ -891,9 +901,67 @@ impl<'a> Emitter<'a> {
             "h",
             &format!("{} / {}", self.f(1.0), self.d.cast(&T::F, "n")),
         );
-        let enc = self.call("encode", false, &["wi.x", "wi.y", "wi.z"]);
+        let enc = if self.m.def.isotropic {
+            self.incident_frame();
+            self.call(
+                "encode",
+                false,
+                &[
+                    "fr.c * wi.x + fr.s * wi.y",
+                    "fr.c * wi.y - fr.s * wi.x",
+                    "wi.z",
+                ],
+            )
+        } else {
+            self.call("encode", false, &["wi.x", "wi.y", "wi.z"])
+        };
         let cond = self.call("condition", true, &[&enc]);
         self.decl(self.st("Cond"), "cond", &cond);
+    }
+
+    /// Isotropic models: the frame of `wi`, `(c, s) = wi.xy / |wi.xy|` (the identity at
+    /// normal incidence), as the kernel's `IncidentFrame::aligning` computes it.
+    fn frame_fn(&mut self) {
+        let ft = self.st("Frame");
+        self.code.line(
+            "// Isotropic model: the rotation about the normal that turns wi into the xz-plane",
+        );
+        self.code.line(
+            "// (phi_i = 0); samples are turned back by it. The identity at normal incidence.",
+        );
+        self.fn_open(ft.clone(), "frame", false, &[(T::F, "x"), (T::F, "y")]);
+        let f = self.d.decl(&ft, "f", None);
+        self.code.line(f);
+        self.code.line(format!("f.c = {};", self.f(1.0)));
+        self.code.line(format!("f.s = {};", self.f(0.0)));
+        self.decl(T::F, "rho", &self.math(Math::Sqrt, "x * x + y * y"));
+        self.code.open(format!(
+            "if (rho > {}) {{",
+            self.f(diffbsdf::frame::NORMAL_INCIDENCE_RHO)
+        ));
+        self.decl(T::F, "inv", &format!("{} / rho", self.f(1.0)));
+        self.code.line("f.c = x * inv;");
+        self.code.line("f.s = y * inv;");
+        self.code.close("}");
+        self.code.line("return f;");
+        self.end_fn();
+    }
+
+    /// Isotropic models: `fr`, the frame of `wi`, and `wi` turned into it.
+    fn incident_frame(&mut self) {
+        let fr = self.call("frame", false, &["wi.x", "wi.y"]);
+        self.decl(self.st("Frame"), "fr", &fr);
+    }
+
+    /// Isotropic models: `r.xy` turned back from the incident frame into the world.
+    fn turn_back(&mut self, r: &str) {
+        if !self.m.def.isotropic {
+            return;
+        }
+        self.decl(T::F, "rx", &format!("fr.c * {r}.x - fr.s * {r}.y"));
+        self.code
+            .line(format!("{r}.y = fr.s * {r}.x + fr.c * {r}.y;"));
+        self.code.line(format!("{r}.x = rx;"));
     }
 
     /// `var = var + h * dv` with phi wrapped on the sphere.
@@ -948,7 +1016,13 @@ impl<'a> Emitter<'a> {
         }
         self.code.close("}");
         let td = self.call("to_direction", false, &["a", "b"]);
-        self.code.line(format!("return {td};"));
+        if self.m.def.isotropic {
+            self.decl(rt, "r", &td);
+            self.turn_back("r");
+            self.code.line("return r;");
+        } else {
+            self.code.line(format!("return {td};"));
+        }
         self.end_fn();
     }
 
@@ -1022,6 +1096,7 @@ impl<'a> Emitter<'a> {
         self.decl(T::F, "ln_pdf", &format!("{lp} - ln_det + {lm}"));
         self.code
             .line(format!("r.pdf = {};", self.math(Math::Exp, "ln_pdf")));
+        self.turn_back("r");
         let fin: Vec<String> = ["r.x", "r.y", "r.z", "r.pdf"]
             .iter()
             .map(|v| self.d.finite(v))
@@ -1258,22 +1333,29 @@ impl<'a> Emitter<'a> {
         self.code.open("if (!wo.ok) {");
         self.code.line(&fail);
         self.code.close("}");
+        self.prologue(false, &fail);
+        let (ox, oy) = if self.m.def.isotropic {
+            self.decl(T::F, "lox", "fr.c * wo.x + fr.s * wo.y");
+            self.decl(T::F, "loy", "fr.c * wo.y - fr.s * wo.x");
+            ("lox", "loy")
+        } else {
+            ("wo.x", "wo.y")
+        };
         if self.sphere() {
-            let rho = self.math(Math::Sqrt, "wo.x * wo.x + wo.y * wo.y");
+            let rho = self.math(Math::Sqrt, &format!("{ox} * {ox} + {oy} * {oy}"));
             self.decl(T::F, "rho", &rho);
             self.code.open(format!("if (!(rho > {zero})) {{"));
             self.code.line(&fail);
             self.code.close("}");
             self.decl(T::F, "ya", &self.d.atan2("rho", "wo.z"));
-            self.decl(T::F, "yb", &self.d.atan2("wo.y", "wo.x"));
+            self.decl(T::F, "yb", &self.d.atan2(oy, ox));
         } else {
             self.code.open(format!("if (!(wo.z > {zero})) {{"));
             self.code.line(&fail);
             self.code.close("}");
-            self.decl(T::F, "ya", "wo.x");
-            self.decl(T::F, "yb", "wo.y");
+            self.decl(T::F, "ya", ox);
+            self.decl(T::F, "yb", oy);
         }
-        self.prologue(false, &fail);
         self.start_point("ya", "yb");
         self.decl(T::F, "ln_det", &zero);
         self.for_open("kk", "n");

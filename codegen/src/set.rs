@@ -44,7 +44,7 @@ pub struct SetCode {
 
 /// The part of a definition the generated code depends on besides the weights.
 fn architecture(d: &ModelDef) -> impl PartialEq {
-    (d.domain, d.activation, d.base, d.velocity)
+    (d.domain, d.activation, d.base, d.velocity, d.isotropic)
 }
 
 fn namer(language: Language) -> Namer {

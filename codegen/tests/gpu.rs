@@ -134,7 +134,8 @@ fn finish(label: &str, steps: u32, e: Errors, flips: usize, vectors: usize, tota
 }
 
 /// The entry points and architectures executed, each its own pipeline in buffer mode (one
-/// pipeline serves every model of an architecture). By default: the disk architecture,
+/// pipeline serves every model of an architecture). By default: the first group, the
+/// isotropic disk architecture (every shipped disk model and two random ones),
 /// all three entry points in f32 and the direction-only entry point in f16.
 /// `DIFFBSDF_GPU_FULL=1` adds the f16 `sample` and `pdf` shaders and the sphere
 /// architecture: lavapipe's LLVM spends minutes per shader on those (in its coroutine
@@ -170,7 +171,8 @@ fn run_language(language: Language, float: Float) -> Errors {
         let def = ModelDesc::from_blob(&m.blob).expect("blob").def;
         let same = |o: &&TestModel| {
             let d = ModelDesc::from_blob(&o.blob).expect("blob").def;
-            (d.domain, d.base, d.velocity) == (def.domain, def.base, def.velocity)
+            (d.domain, d.base, d.velocity, d.isotropic)
+                == (def.domain, def.base, def.velocity, def.isotropic)
         };
         match shapes.iter_mut().find(|g| same(&g[0])) {
             Some(g) => g.push(m),

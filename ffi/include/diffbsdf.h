@@ -78,6 +78,7 @@ typedef struct diffbsdf_info {
     uint32_t velocity_hidden_layers; /**< 3 or 4. */
     uint32_t velocity_width;         /**< Neurons per hidden layer of the velocity net. */
     uint32_t param_count;            /**< Weights and biases of both nets. */
+    uint32_t isotropic;              /**< 1: nets see wi turned to phi = 0 (isotropic BSDF). */
     char name[33];                   /**< The model's name, NUL-terminated. */
 } diffbsdf_info;
 

@@ -54,6 +54,8 @@ pub struct diffbsdf_info {
     pub velocity_hidden_layers: u32,
     pub velocity_width: u32,
     pub param_count: u32,
+    /// 1 when the model is isotropic (its nets see `wi` turned to `phi = 0`).
+    pub isotropic: u32,
     /// The model's name, NUL-terminated.
     pub name: [c_char; 33],
 }
@@ -279,6 +281,7 @@ pub unsafe extern "C" fn diffbsdf_model_info(
             velocity_hidden_layers: def.velocity.hidden_layers as u32,
             velocity_width: def.velocity.width as u32,
             param_count: def.param_count() as u32,
+            isotropic: def.isotropic as u32,
             name,
         };
         // SAFETY: non-null and aligned (checked), writable by contract.

@@ -23,7 +23,7 @@ pub enum BlobError {
     /// The activation byte is not a known activation.
     UnknownActivation(u8),
     /// A header field is out of range (zero width, zero layers, name too long or not
-    /// UTF-8, reserved bytes set, base encoding longer than the velocity encoding...).
+    /// UTF-8, unknown flag bits set, base encoding longer than the velocity encoding...).
     BadHeader(&'static str),
     /// The declared parameter count does not match the declared shape.
     ParamCountMismatch { declared: u32, from_shape: usize },

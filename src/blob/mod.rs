@@ -109,7 +109,7 @@ struct RawHeader {
     name_len: u8,
     default_steps: u16,
     param_count: u32,
-    reserved: u32,
+    flags: u32,
     name: [u8; NAME_CAPACITY],
 }
 
@@ -123,7 +123,7 @@ impl RawHeader {
         let name_len = cur.u8()?;
         let default_steps = cur.u16()?;
         let param_count = cur.u32()?;
-        let reserved = cur.u32()?;
+        let flags = cur.u32()?;
         let mut name = [0; NAME_CAPACITY];
         name.copy_from_slice(cur.take(NAME_CAPACITY)?);
         Some(RawHeader {
@@ -135,7 +135,7 @@ impl RawHeader {
             name_len,
             default_steps,
             param_count,
-            reserved,
+            flags,
             name,
         })
     }
@@ -144,8 +144,8 @@ impl RawHeader {
         let domain = Domain::from_code(self.domain).ok_or(BlobError::UnknownDomain(self.domain))?;
         let activation = Activation::from_code(self.activation)
             .ok_or(BlobError::UnknownActivation(self.activation))?;
-        if self.reserved != 0 {
-            return Err(BlobError::BadHeader("reserved bytes are not zero"));
+        if self.flags & !FLAG_ISOTROPIC != 0 {
+            return Err(BlobError::BadHeader("unknown flag bits are set"));
         }
         check_shape(self.base, "base net")?;
         check_shape(self.velocity, "velocity net")?;
@@ -170,6 +170,7 @@ impl RawHeader {
             base: self.base,
             velocity: self.velocity,
             default_steps: self.default_steps,
+            isotropic: self.flags & FLAG_ISOTROPIC != 0,
             name,
         };
         let from_shape = def.param_count();
@@ -182,6 +183,9 @@ impl RawHeader {
         Ok(def)
     }
 }
+
+/// Header flag (bytes 28..32, u32): the model is isotropic.
+pub(crate) const FLAG_ISOTROPIC: u32 = 1;
 
 /// Largest width and layer count and frequency count a blob may declare (keeps every size
 /// computation far from overflow).

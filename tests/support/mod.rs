@@ -199,6 +199,33 @@ pub fn random_sphere(seed: u64, min_steps: u32) -> Model4x32 {
     Model4x32::from_params(def, &params).unwrap()
 }
 
+/// `def` with the isotropic flag set, and the parameters `write` puts in blob order.
+fn flagged_isotropic(def: &ModelDef, write: impl FnOnce(&mut [f32])) -> (ModelDef, Vec<f32>) {
+    let mut def = *def;
+    def.isotropic = true;
+    let mut p = vec![0.0; def.param_count()];
+    write(&mut p);
+    (def, p)
+}
+
+/// A random disk model as [`random_disk`], flagged isotropic (nets see `wi` at `phi = 0`).
+pub fn random_isotropic_disk(seed: u64, min_steps: u32) -> Model3x32 {
+    let m = random_disk(seed, min_steps);
+    let (def, p) = flagged_isotropic(m.def(), |p| {
+        m.params(p).unwrap();
+    });
+    Model3x32::from_params(def, &p).unwrap()
+}
+
+/// A random sphere model as [`random_sphere`], flagged isotropic.
+pub fn random_isotropic_sphere(seed: u64, min_steps: u32) -> Model4x32 {
+    let m = random_sphere(seed, min_steps);
+    let (def, p) = flagged_isotropic(m.def(), |p| {
+        m.params(p).unwrap();
+    });
+    Model4x32::from_params(def, &p).unwrap()
+}
+
 /// A unit direction from two uniforms, over the upper hemisphere (`upper`) or the sphere.
 pub fn direction(u0: f32, u1: f32, upper: bool) -> diffbsdf::glam::Vec3 {
     let z = if upper { u0 } else { 2.0 * u0 - 1.0 };

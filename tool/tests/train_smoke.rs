@@ -88,3 +88,42 @@ fn same_seed_gives_the_same_blob() {
         b.model.blob(Precision::F32).unwrap()
     );
 }
+
+#[test]
+fn isotropic_materials_are_fitted_in_the_incident_frame() {
+    // Isotropic: the blob says so, and sampling commutes with rotations about the normal.
+    let f = tiny_fit("conductor:ggx,alpha=0.3,metal=Cu", Domain::Disk, 3);
+    let m = Model3x32::from_blob(&f.model.blob(Precision::F32).unwrap()).unwrap();
+    assert!(m.def().isotropic);
+    let turn = |w: Vec3, a: f32| {
+        let (s, c) = a.sin_cos();
+        Vec3::new(c * w.x - s * w.y, s * w.x + c * w.y, w.z)
+    };
+    let wi = Vec3::new(0.6, 0.0, 0.8);
+    let mut compared = 0;
+    for k in 0..64 {
+        let u = Vec2::new((k as f32 + 0.5) / 64.0, ((k * 37 % 64) as f32 + 0.5) / 64.0);
+        let (Some(a), Some(b)) = (m.sample(wi, u), m.sample(turn(wi, 2.0), u)) else {
+            continue;
+        };
+        assert!((turn(a.wo, 2.0) - b.wo).length() < 1e-5, "{a:?} {b:?}");
+        assert!((a.pdf - b.pdf).abs() <= 1e-3 * a.pdf, "{a:?} {b:?}");
+        compared += 1;
+    }
+    assert!(compared > 32, "{compared}");
+    // Anisotropic, or isotropy switched off: the full wi is the condition.
+    let aniso = parse_spec("conductor:ggx,alpha=0.05,alpha_y=0.3,metal=Cu").unwrap();
+    let f = fit_material(
+        aniso.as_ref(),
+        "a",
+        &FitConfig::tiny(Domain::Disk, 3),
+        &Silent,
+    )
+    .unwrap();
+    assert!(!f.model.def().isotropic);
+    let iso = parse_spec("conductor:ggx,alpha=0.3,metal=Cu").unwrap();
+    let mut cfg = FitConfig::tiny(Domain::Disk, 3);
+    cfg.use_isotropy = false;
+    let f = fit_material(iso.as_ref(), "b", &cfg, &Silent).unwrap();
+    assert!(!f.model.def().isotropic);
+}

@@ -526,12 +526,6 @@ float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, flo
     if (!wo.ok) {
         return 0.0;
     }
-    float rho = sqrt(wo.x * wo.x + wo.y * wo.y);
-    if (!(rho > 0.0)) {
-        return 0.0;
-    }
-    float ya = atan(rho, wo.z);
-    float yb = atan(wo.y, wo.x);
     diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
     if (!(wi.ok)) {
         return 0.0;
@@ -542,6 +536,12 @@ float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, flo
     }
     float h = 1.0 / float(n);
     diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
+    float rho = sqrt(wo.x * wo.x + wo.y * wo.y);
+    if (!(rho > 0.0)) {
+        return 0.0;
+    }
+    float ya = atan(rho, wo.z);
+    float yb = atan(wo.y, wo.x);
     float a = ya;
     float b = diffbsdf_tiny_sphere_wrap(yb);
     float ln_det = 0.0;

@@ -396,12 +396,6 @@ static inline float diffbsdf_tiny_sphere_pdf_impl(const float *params, float wx,
     if (!wo.ok) {
         return 0.0f;
     }
-    float rho = sqrtf(wo.x * wo.x + wo.y * wo.y);
-    if (!(rho > 0.0f)) {
-        return 0.0f;
-    }
-    float ya = atan2f(rho, wo.z);
-    float yb = atan2f(wo.y, wo.x);
     diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
     if (!(wi.ok)) {
         return 0.0f;
@@ -412,6 +406,12 @@ static inline float diffbsdf_tiny_sphere_pdf_impl(const float *params, float wx,
     }
     float h = 1.0f / (float)(n);
     diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(params, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
+    float rho = sqrtf(wo.x * wo.x + wo.y * wo.y);
+    if (!(rho > 0.0f)) {
+        return 0.0f;
+    }
+    float ya = atan2f(rho, wo.z);
+    float yb = atan2f(wo.y, wo.x);
     float a = ya;
     float b = diffbsdf_tiny_sphere_wrap(yb);
     float ln_det = 0.0f;

@@ -142,14 +142,20 @@ fn named(mut def: ModelDef, name: &str, precision: Precision) -> ModelDef {
 }
 
 /// The random-weight models every conformance test runs (the paper's disk and sphere
-/// architectures, f32 and f16 weights), and every shipped model in `models/`.
+/// architectures, f32 and f16 weights, isotropic and not), and every shipped model in
+/// `models/`. The isotropic disk models come first: the GPU test's default run executes the
+/// first architecture group only (`tests/gpu.rs`), and every shipped disk model is isotropic.
 pub fn test_models() -> Vec<TestModel> {
+    let iso = |mut d: ModelDef| {
+        d.isotropic = true;
+        d
+    };
     let disk = ModelDef::paper_disk();
     let sphere = ModelDef::paper_sphere();
     let mut models = vec![
         TestModel {
             name: "random_disk".into(),
-            blob: random_blob(&named(disk, "random_disk", Precision::F32), 11, 1.2),
+            blob: random_blob(&named(iso(disk), "random_disk", Precision::F32), 11, 1.2),
         },
         TestModel {
             name: "random_sphere".into(),
@@ -157,7 +163,23 @@ pub fn test_models() -> Vec<TestModel> {
         },
         TestModel {
             name: "random_disk_f16".into(),
-            blob: random_blob(&named(disk, "random_disk_f16", Precision::F16), 13, 1.2),
+            blob: random_blob(
+                &named(iso(disk), "random_disk_f16", Precision::F16),
+                13,
+                1.2,
+            ),
+        },
+        TestModel {
+            name: "random_disk_aniso".into(),
+            blob: random_blob(&named(disk, "random_disk_aniso", Precision::F32), 14, 1.2),
+        },
+        TestModel {
+            name: "random_sphere_iso".into(),
+            blob: random_blob(
+                &named(iso(sphere), "random_sphere_iso", Precision::F32),
+                15,
+                1.2,
+            ),
         },
     ];
     models.extend(shipped_models());
@@ -238,7 +260,7 @@ impl Kernel {
         .map(|s| (s.wo.to_array(), s.pdf))
     }
     /// How much the sampling map `x0 -> wo` amplifies a perturbation of the flow's start
-    /// point near `u` (finite differences along both `u` axes, 1e-3 apart): rounding
+    /// point near `u` (finite differences along both `u` axes, 1e-3 and 1e-4 apart): rounding
     /// differences of order 1e-7 injected along the flow (the kernel's build contracts
     /// multiply-adds into FMAs, gcc and the shader compilers may not) reach the direction
     /// multiplied by about this much. 1 or less for gentle flows; large for the sharp lobes
@@ -253,9 +275,11 @@ impl Kernel {
         };
         let x0 = base.sample(u);
         let mut amp = 1.0f32;
-        for j in 0..2 {
+        // Two spacings: where the base's quantile is steep (a wrapped Cauchy's far side,
+        // near u = 0 or 1) 1e-3 in u is already a large, nonlinear move in x0.
+        for (j, du) in [(0, 1e-3f32), (1, 1e-3), (0, 1e-4), (1, 1e-4)] {
             let mut v = u;
-            v[j] = if u[j] > 0.5 { u[j] - 1e-3 } else { u[j] + 1e-3 };
+            v[j] = if u[j] > 0.5 { u[j] - du } else { u[j] + du };
             let x1 = base.sample(v);
             let dx = ((x1[0] - x0[0]).powi(2) + (x1[1] - x0[1]).powi(2)).sqrt();
             if let Some(w1) = self.direction(wi, v, steps) {

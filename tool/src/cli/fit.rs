@@ -115,6 +115,14 @@ pub struct FitArgs {
     /// Train the student only at its Euler times k/N.
     #[arg(long)]
     pub euler_times: bool,
+    /// Condition on the full wi even when the material is isotropic (by default an
+    /// isotropic material is fitted in the incident frame: wi turned to phi = 0).
+    #[arg(long)]
+    pub ignore_isotropy: bool,
+    /// Isotropic fits: fraction of the training wi drawn with theta_i uniform in angle
+    /// (the rest uniform in solid angle, which favours grazing). Default 0.5.
+    #[arg(long)]
+    pub angle_fraction: Option<f64>,
     /// Batch size of the teacher and the student.
     #[arg(long)]
     pub batch: Option<usize>,
@@ -288,6 +296,12 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     set(&mut c.student.iters, args.student_iters);
     set(&mut c.teacher.batch, args.batch);
     c.student_euler_times |= args.euler_times;
+    if args.ignore_isotropy {
+        c.use_isotropy = false;
+    }
+    if let Some(a) = args.angle_fraction {
+        c.angle_fraction = a.clamp(0.0, 1.0);
+    }
     if let Some(g) = args.grazing {
         c.grazing = g;
     }

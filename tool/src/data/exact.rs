@@ -71,6 +71,25 @@ pub fn exact_pairs(m: &dyn Material, band: Band, n: usize, cfg: &ExactConfig) ->
     generate(m, n, cfg, |rng| band.sample_uniform([rng.gen(), rng.gen()]))
 }
 
+/// `n` pairs for isotropic fits: a fraction `angle` of the `wi` with `theta_i` uniform in
+/// angle within `band`, the rest uniform in solid angle (`angle = 1`: all in angle, and
+/// no extra random draw, so the stream matches earlier fits).
+pub fn exact_pairs_uniform_angle(
+    m: &dyn Material,
+    band: Band,
+    n: usize,
+    cfg: &ExactConfig,
+    angle: f64,
+) -> Generated {
+    generate(m, n, cfg, |rng| {
+        if angle >= 1.0 || rng.gen::<f64>() < angle {
+            band.sample_uniform_angle([rng.gen(), rng.gen()])
+        } else {
+            band.sample_uniform([rng.gen(), rng.gen()])
+        }
+    })
+}
+
 fn generate<F>(m: &dyn Material, n: usize, cfg: &ExactConfig, draw_wi: F) -> Generated
 where
     F: Fn(&mut Pcg64) -> Vec3 + Sync,

@@ -11,6 +11,6 @@ pub mod exact;
 pub mod mcmc;
 pub mod pair;
 
-pub use exact::{exact_pairs, exact_pairs_for_wi, ExactConfig};
+pub use exact::{exact_pairs, exact_pairs_for_wi, exact_pairs_uniform_angle, ExactConfig};
 pub use mcmc::{mcmc_pairs, McmcConfig};
 pub use pair::{Band, Domain, Generated, Pair};

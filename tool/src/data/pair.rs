@@ -73,6 +73,18 @@ impl Band {
     }
 }
 
+impl Band {
+    /// A direction with `theta` uniform in angle inside the band and `phi` uniform, from
+    /// `u` in `[0,1)^2`. For isotropic fits, whose nets see `theta_i` alone: solid-angle
+    /// sampling would give `theta_i` the density `sin(theta_i)`, starving normal incidence.
+    pub fn sample_uniform_angle(&self, u: [f64; 2]) -> Vec3 {
+        let theta = self.theta_min + (self.theta_max - self.theta_min) * u[0];
+        let phi = 2.0 * PI * u[1];
+        let s = theta.sin();
+        Vec3::new(s * phi.cos(), s * phi.sin(), theta.cos())
+    }
+}
+
 /// One training pair.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pair {
@@ -83,6 +95,22 @@ pub struct Pair {
 }
 
 impl Pair {
+    /// The pair turned about the normal so that `wi` has `phi = 0` (the frame of an
+    /// isotropic model, `diffbsdf::frame::IncidentFrame`); unchanged at normal incidence.
+    pub fn in_incident_frame(&self) -> Pair {
+        let rho = (self.wi.x * self.wi.x + self.wi.y * self.wi.y).sqrt();
+        if !(rho > f64::from(diffbsdf::frame::NORMAL_INCIDENCE_RHO)) {
+            return *self;
+        }
+        let (c, s) = (self.wi.x / rho, self.wi.y / rho);
+        // R(-phi_i) w = (c x + s y, c y - s x, z)
+        let turn = |w: Vec3| Vec3::new(c * w.x + s * w.y, c * w.y - s * w.x, w.z);
+        Pair {
+            wi: turn(self.wi),
+            wo: turn(self.wo),
+        }
+    }
+
     /// Disk coordinates `(wo.x, wo.y)`.
     pub fn disk(&self) -> [f64; 2] {
         [self.wo.x, self.wo.y]

@@ -154,4 +154,8 @@ impl Material for Conductor {
     fn is_transmissive(&self) -> bool {
         false
     }
+
+    fn is_isotropic(&self) -> bool {
+        self.mf.is_isotropic()
+    }
 }

@@ -178,6 +178,10 @@ impl Material for Dielectric {
         true
     }
 
+    fn is_isotropic(&self) -> bool {
+        self.mf.is_isotropic()
+    }
+
     fn index_of_side(&self, w: Vec3) -> f64 {
         if w.z < 0.0 {
             self.eta

@@ -54,4 +54,8 @@ impl Material for Lambertian {
     fn is_transmissive(&self) -> bool {
         false
     }
+
+    fn is_isotropic(&self) -> bool {
+        true
+    }
 }

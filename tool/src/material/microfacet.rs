@@ -45,6 +45,11 @@ pub struct Microfacet {
 }
 
 impl Microfacet {
+    /// True when `alpha_x == alpha_y` (the distribution is unchanged by rotations about z).
+    pub fn is_isotropic(&self) -> bool {
+        self.alpha_x == self.alpha_y
+    }
+
     /// A distribution; roughness values are clamped to `[MIN_ALPHA, inf)`.
     pub fn new(dist: Distribution, alpha_x: f64, alpha_y: f64) -> Self {
         Self {

@@ -78,6 +78,10 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// True when the BSDF transmits light (has a non-zero part with `wi.z * wo.z < 0`).
     fn is_transmissive(&self) -> bool;
 
+    /// True when the BSDF is unchanged by rotations about the normal:
+    /// `f(R wi, R wo) = f(wi, wo)` for every rotation `R` about `z`.
+    fn is_isotropic(&self) -> bool;
+
     /// Refractive index of the medium on the side of `w` relative to the outside (1 above
     /// the surface); used by the generalized reciprocity `f(wi,wo)/eta(wi)^2 =
     /// f(wo,wi)/eta(wo)^2` (Veach 1997, eq. 5.14). 1 for non-transmissive materials.

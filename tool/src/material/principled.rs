@@ -352,6 +352,10 @@ impl Material for Principled {
         self.spec_trans > 0.0 && self.metallic < 1.0
     }
 
+    fn is_isotropic(&self) -> bool {
+        self.anisotropic == 0.0
+    }
+
     fn index_of_side(&self, w: Vec3) -> f64 {
         if w.z < 0.0 && self.is_transmissive() {
             self.eta

@@ -2,7 +2,7 @@
 //! the encodings of `wi` computed once.
 
 use super::features::{base_encoding, velocity_encoding, BASE_ENC, VEL_ENC};
-use crate::data::{exact_pairs, Band, ExactConfig, Pair};
+use crate::data::{exact_pairs, exact_pairs_uniform_angle, Band, ExactConfig, Pair};
 use crate::material::Material;
 use diffbsdf::Domain;
 
@@ -10,6 +10,12 @@ use diffbsdf::Domain;
 pub trait TrainingData {
     /// `(wi, x1)` pairs; `x1` in the domain's coordinates.
     fn pairs(&self) -> Vec<([f32; 3], [f32; 2])>;
+
+    /// True when the pairs are in the incident frame of an isotropic model (every `wi` at
+    /// `phi = 0`); the fitted model then turns `wi` the same way.
+    fn isotropic(&self) -> bool {
+        false
+    }
 }
 
 /// Pairs with their `wi` encodings.
@@ -25,6 +31,8 @@ pub struct TrainingSet {
     pub base_enc: Vec<[f32; BASE_ENC]>,
     /// Targets `x1`.
     pub x1: Vec<[f32; 2]>,
+    /// The pairs are in the incident frame (see [`TrainingData::isotropic`]).
+    pub isotropic: bool,
 }
 
 impl TrainingSet {
@@ -36,6 +44,7 @@ impl TrainingSet {
             enc: Vec::with_capacity(pairs.len()),
             base_enc: Vec::with_capacity(pairs.len()),
             x1: Vec::with_capacity(pairs.len()),
+            isotropic: false,
         };
         for &(wi, x1) in pairs {
             if wi.iter().chain(&x1).all(|v| v.is_finite()) {
@@ -50,7 +59,9 @@ impl TrainingSet {
 
     /// From the materials' pair generator.
     pub fn from_source(domain: Domain, source: &dyn TrainingData) -> Self {
-        Self::new(domain, &source.pairs())
+        let mut set = Self::new(domain, &source.pairs());
+        set.isotropic = source.isotropic();
+        set
     }
 
     /// Number of pairs.
@@ -80,6 +91,11 @@ pub struct MaterialPairs<'a> {
     /// Fraction of extra pairs with `wi` within 30 degrees of the horizon, where the
     /// target is hardest to learn (0 for none).
     pub grazing: f64,
+    /// Turn every pair into the incident frame (for an isotropic material).
+    pub isotropic: bool,
+    /// Isotropic fits: fraction of `wi` drawn with `theta_i` uniform in angle (the rest
+    /// uniform in solid angle).
+    pub angle_fraction: f64,
 }
 
 impl TrainingData for MaterialPairs<'_> {
@@ -95,7 +111,16 @@ impl TrainingData for MaterialPairs<'_> {
             seed: self.seed,
         };
         let band = Band::split(1, both)[0];
-        let mut pairs = exact_pairs(self.material, band, self.count, &cfg).pairs;
+        // Isotropic fits see theta_i alone: draw it uniform in angle, so normal incidence
+        // is covered (uniform in solid angle gives theta_i the density sin(theta_i)).
+        let draw = |b: Band, n: usize, cfg: &ExactConfig| {
+            if self.isotropic {
+                exact_pairs_uniform_angle(self.material, b, n, cfg, self.angle_fraction).pairs
+            } else {
+                exact_pairs(self.material, b, n, cfg).pairs
+            }
+        };
+        let mut pairs = draw(band, self.count, &cfg);
         let extra = (self.count as f64 * self.grazing.max(0.0)) as usize;
         if extra > 0 {
             let deg = std::f64::consts::PI / 180.0;
@@ -114,13 +139,24 @@ impl TrainingData for MaterialPairs<'_> {
                     seed: self.seed.wrapping_add(0x5eed_0000 + k as u64 * 0x1_0000),
                     ..cfg
                 };
-                pairs.extend(exact_pairs(self.material, *b, extra / bands.len(), &cfg).pairs);
+                pairs.extend(draw(*b, extra / bands.len(), &cfg));
             }
         }
         pairs
             .iter()
-            .filter_map(|p| to_flow_pair(self.domain, p))
+            .map(|p| {
+                if self.isotropic {
+                    p.in_incident_frame()
+                } else {
+                    *p
+                }
+            })
+            .filter_map(|p| to_flow_pair(self.domain, &p))
             .collect()
+    }
+
+    fn isotropic(&self) -> bool {
+        self.isotropic
     }
 }
 

@@ -303,4 +303,8 @@ impl Material for RglMaterial {
     fn is_transmissive(&self) -> bool {
         false
     }
+
+    fn is_isotropic(&self) -> bool {
+        self.isotropic
+    }
 }
