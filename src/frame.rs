@@ -40,16 +40,6 @@ impl IncidentFrame {
         }
     }
 
-    /// `cos(phi_i)`.
-    pub fn cos(&self) -> f32 {
-        self.cos
-    }
-
-    /// `sin(phi_i)`.
-    pub fn sin(&self) -> f32 {
-        self.sin
-    }
-
     /// `R(-phi_i) v`: a world vector in the frame.
     #[inline(always)]
     pub fn to_local(&self, v: Vec3) -> Vec3 {

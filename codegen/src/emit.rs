@@ -947,7 +947,7 @@ impl<'a> Emitter<'a> {
         self.end_fn();
     }
 
-    /// Isotropic models: `fr`, the frame of `wi`, and `wi` turned into it.
+    /// Isotropic models: `fr`, the frame of `wi` (the encoding takes `wi` turned into it).
     fn incident_frame(&mut self) {
         let fr = self.call("frame", false, &["wi.x", "wi.y"]);
         self.decl(self.st("Frame"), "fr", &fr);
@@ -1202,9 +1202,11 @@ impl<'a> Emitter<'a> {
         let scale = format!("{one} + {mx}({}, {})", abs(self, "a"), abs(self, "b"));
         self.decl(T::F, "scale", &scale);
         self.code.open(format!("if (size <= {tol} * scale) {{"));
+        self.code.line(
+            "// Converged: the update is below the f32 noise of x + h v(x); det is taken at the",
+        );
         self.code
-            .line("// Converged: the update is below the f32 noise of x + h v(x).");
-        self.code.open(format!("if (at.det > {zero}) {{"));
+            .line("// returned point, where the forward pass takes it.");
         self.code.line("x.a = a - d0;");
         if self.sphere() {
             let w = self.call("wrap", false, &["b - d1"]);
@@ -1212,7 +1214,14 @@ impl<'a> Emitter<'a> {
         } else {
             self.code.line("x.b = b - d1;");
         }
-        self.code.line("x.det = at.det;");
+        let fin = self.call(
+            "residual",
+            true,
+            &["cond", "t", "h", "ya", "yb", "x.a", "x.b"],
+        );
+        self.decl(self.st("Residual"), "fin", &fin);
+        self.code.open(format!("if (fin.det > {zero}) {{"));
+        self.code.line("x.det = fin.det;");
         self.code.close("}");
         self.code.line("return x;");
         self.code.close("}");

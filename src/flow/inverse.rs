@@ -110,8 +110,13 @@ impl<
             }
             let scale = 1.0 + x[0].abs().max(x[1].abs());
             if size <= NEWTON_TOL * scale {
-                // Converged: the last update is below the f32 noise of `x + h v(x)`.
-                return (det > 0.0).then_some((domain.advance(x, [-d[0], -d[1]]), det));
+                // Converged: the last update is below the f32 noise of `x + h v(x)`. The
+                // determinant is re-evaluated at the returned point, as the forward pass
+                // evaluates it at x_k: where the flow compresses (det << 1) the one at the
+                // previous iterate differs by far more than rounding.
+                let x = domain.advance(x, [-d[0], -d[1]]);
+                let det = self.residual(step, x, y, h).2;
+                return (det > 0.0).then_some((x, det));
             }
             let norm = r[0].abs().max(r[1].abs());
             let mut lambda = 1.0;

@@ -507,11 +507,13 @@ static inline diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_di
         }
         float scale = 1.0f + fmaxf(fabsf(a), fabsf(b));
         if (size <= 1e-6f * scale) {
-            /* Converged: the update is below the f32 noise of x + h v(x). */
-            if (at.det > 0.0f) {
-                x.a = a - d0;
-                x.b = b - d1;
-                x.det = at.det;
+            /* Converged: the update is below the f32 noise of x + h v(x); det is taken at the */
+            /* returned point, where the forward pass takes it. */
+            x.a = a - d0;
+            x.b = b - d1;
+            diffbsdf_tiny_disk_Residual fin = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, x.a, x.b);
+            if (fin.det > 0.0f) {
+                x.det = fin.det;
             }
             return x;
         }

@@ -472,11 +472,13 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
         }
         var scale: f32 = 1.0f + max(abs(a), abs(b));
         if (size <= 1e-6f * scale) {
-            // Converged: the update is below the f32 noise of x + h v(x).
-            if (at.det > 0.0f) {
-                x.a = a - d0;
-                x.b = b - d1;
-                x.det = at.det;
+            // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
+            // returned point, where the forward pass takes it.
+            x.a = a - d0;
+            x.b = b - d1;
+            var fin: diffbsdf_tiny_disk_Residual = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, x.a, x.b);
+            if (fin.det > 0.0f) {
+                x.det = fin.det;
             }
             return x;
         }

@@ -465,11 +465,13 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
         }
         float scale = 1.0 + max(abs(a), abs(b));
         if (size <= 0.002 * scale) {
-            // Converged: the update is below the f32 noise of x + h v(x).
-            if (at.det > 0.0) {
-                x.a = a - d0;
-                x.b = diffbsdf_tiny_sphere_wrap(b - d1);
-                x.det = at.det;
+            // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
+            // returned point, where the forward pass takes it.
+            x.a = a - d0;
+            x.b = diffbsdf_tiny_sphere_wrap(b - d1);
+            diffbsdf_tiny_sphere_Residual fin = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, x.a, x.b);
+            if (fin.det > 0.0) {
+                x.det = fin.det;
             }
             return x;
         }
