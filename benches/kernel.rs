@@ -9,7 +9,7 @@ mod support;
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::{blob::blob_len, Model, Precision, Sample};
+use diffbsdf::{internals::blob::blob_len, Model, Precision, Sample};
 
 const BATCH: usize = 4096;
 

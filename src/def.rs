@@ -2,6 +2,8 @@
 //! stores it, the kernel checks it against its compiled shape, and codegen and the trainer
 //! read it.
 
+use crate::spec::{BASE_OUTPUTS, ENCODING_PER_FREQ, ENCODING_RAW, VELOCITY_OUTPUTS};
+
 /// Where the flow lives, and so how a point `x` of the flow maps to a direction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Domain {
@@ -41,7 +43,9 @@ impl Domain {
 /// are half the size, and generated shaders can evaluate them in f16.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Precision {
+    /// 4-byte IEEE single precision.
     F32,
+    /// 2-byte IEEE half precision.
     F16,
 }
 
@@ -104,18 +108,51 @@ pub struct NetShape {
 
 impl NetShape {
     /// Length of the `wi` encoding: the raw `wi` and a sine and cosine per frequency and axis.
+    #[must_use]
     pub const fn encoding_len(self) -> usize {
         encoding_len(self.freqs)
     }
 }
 
 /// Length of the NeRF encoding of `wi` with `freqs` frequencies: `3 + 6 * freqs`.
+#[must_use]
 pub const fn encoding_len(freqs: u8) -> usize {
-    3 + 6 * freqs as usize
+    ENCODING_RAW + ENCODING_PER_FREQ * freqs as usize
 }
 
-/// Outputs of the base net: two location and two log-scale parameters.
-pub const BASE_OUTPUTS: usize = 4;
+/// One of a model's two networks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Net {
+    /// `wi` encoding (`base.freqs`) -> the four parameters of `p0(x0 | wi)`.
+    Base,
+    /// `[flow features (Domain::feature_count), t, wi encoding (velocity.freqs)]` -> `v`.
+    Velocity,
+}
+
+impl Net {
+    /// Both nets, in blob order.
+    pub const ALL: [Net; 2] = [Net::Base, Net::Velocity];
+}
+
+/// One fully connected layer `z = W x + b`; the blob stores `W` row by row (one output's
+/// weights over every input), then `b`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Layer {
+    /// Inputs (columns of `W`).
+    pub inputs: usize,
+    /// Outputs (rows of `W`, entries of `b`).
+    pub outputs: usize,
+    /// Whether the model's activation follows (every layer but the readout).
+    pub activated: bool,
+}
+
+impl Layer {
+    /// Weights and biases of the layer: `outputs * (inputs + 1)`.
+    #[must_use]
+    pub const fn param_count(&self) -> usize {
+        self.outputs * (self.inputs + 1)
+    }
+}
 
 /// Longest model name stored in a blob, in bytes.
 pub const NAME_CAPACITY: usize = 32;
@@ -166,8 +203,11 @@ impl ModelName {
 /// Everything that describes a model except its weights.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ModelDef {
+    /// Where the flow lives.
     pub domain: Domain,
+    /// How the blob stores the weights.
     pub precision: Precision,
+    /// The hidden layers' activation.
     pub activation: Activation,
     /// The base net: `wi` encoding -> parameters of `p0(x0 | wi)`.
     pub base: NetShape,
@@ -176,8 +216,9 @@ pub struct ModelDef {
     /// Euler steps used when the caller does not choose.
     pub default_steps: u16,
     /// The material is unchanged by rotations about the normal: the nets see `wi` turned
-    /// into the xz-plane and samples are turned back ([`crate::frame::IncidentFrame`]).
+    /// into the xz-plane and samples are turned back ([`crate::internals::frame::IncidentFrame`]).
     pub isotropic: bool,
+    /// A short label (codegen names things after it).
     pub name: ModelName,
 }
 
@@ -215,34 +256,85 @@ impl ModelDef {
     }
 
     /// Inputs of the velocity net's first layer: features, `t`, `wi` encoding.
+    #[must_use]
     pub const fn velocity_inputs(&self) -> usize {
         self.domain.feature_count() + 1 + self.velocity.encoding_len()
     }
 
-    /// Number of weights and biases, in the order the blob stores them.
-    pub const fn param_count(&self) -> usize {
-        let bw = self.base.width as usize;
-        let vw = self.velocity.width as usize;
-        let base = mlp_params(
-            self.base.encoding_len(),
-            bw,
-            self.base.hidden_layers,
-            BASE_OUTPUTS,
-        );
-        let vel = mlp_params(self.velocity_inputs(), vw, self.velocity.hidden_layers, 2);
-        base + vel
+    /// The shape of `net`.
+    #[must_use]
+    pub const fn net_shape(&self, net: Net) -> NetShape {
+        match net {
+            Net::Base => self.base,
+            Net::Velocity => self.velocity,
+        }
     }
-}
 
-/// Parameters of an MLP `inputs -> width^(hidden) -> outputs`, with biases.
-const fn mlp_params(inputs: usize, width: usize, hidden: u8, outputs: usize) -> usize {
-    let hidden = hidden as usize;
-    let first = inputs * width + width;
-    let mid = if hidden > 0 {
-        (hidden - 1) * (width * width + width)
-    } else {
-        0
-    };
-    let last = width * outputs + outputs;
-    first + mid + last
+    /// Inputs of `net`'s first layer.
+    #[must_use]
+    pub const fn net_inputs(&self, net: Net) -> usize {
+        match net {
+            Net::Base => self.base.encoding_len(),
+            Net::Velocity => self.velocity_inputs(),
+        }
+    }
+
+    /// Outputs of `net`'s readout.
+    #[must_use]
+    pub const fn net_outputs(&self, net: Net) -> usize {
+        match net {
+            Net::Base => BASE_OUTPUTS,
+            Net::Velocity => VELOCITY_OUTPUTS,
+        }
+    }
+
+    /// Layers of `net`: its hidden layers and the readout.
+    #[must_use]
+    pub const fn layer_count(&self, net: Net) -> usize {
+        self.net_shape(net).hidden_layers as usize + 1
+    }
+
+    /// Layer `index` of `net` (0 is the first hidden layer, `layer_count - 1` the
+    /// readout); `None` past the readout.
+    #[must_use]
+    pub const fn layer(&self, net: Net, index: usize) -> Option<Layer> {
+        let count = self.layer_count(net);
+        if index >= count {
+            return None;
+        }
+        let width = self.net_shape(net).width as usize;
+        let inputs = if index == 0 {
+            self.net_inputs(net)
+        } else {
+            width
+        };
+        let readout = index + 1 == count;
+        Some(Layer {
+            inputs,
+            outputs: if readout {
+                self.net_outputs(net)
+            } else {
+                width
+            },
+            activated: !readout,
+        })
+    }
+
+    /// Weights and biases of `net`, summed over its layers.
+    #[must_use]
+    pub const fn net_param_count(&self, net: Net) -> usize {
+        let mut total = 0;
+        let mut index = 0;
+        while let Some(layer) = self.layer(net, index) {
+            total += layer.param_count();
+            index += 1;
+        }
+        total
+    }
+
+    /// Number of weights and biases, in the order the blob stores them (base net first).
+    #[must_use]
+    pub const fn param_count(&self) -> usize {
+        self.net_param_count(Net::Base) + self.net_param_count(Net::Velocity)
+    }
 }

@@ -5,12 +5,32 @@
 //! Flow points `x` are in the frame the nets work in: for an isotropic model, the frame
 //! turned about the normal so that `wi` has `phi = 0` ([`crate::frame::IncidentFrame`]).
 
+use crate::any_model::{with_model, AnyModel};
 use crate::base::BaseDist;
 use crate::flow::{step_det, step_time};
 use crate::input::{uniform_pair, unit_direction};
 use crate::model::Model;
 use crate::net::Jacobian;
 use glam::{Vec2, Vec3};
+
+/// Intermediate quantities of a model's evaluation (import the trait to call them).
+pub trait Diagnostics {
+    /// `v(x, t, wi)` and the hand-derived `dv/dx` at a flow point `x`.
+    fn velocity_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<([f32; 2], Jacobian)>;
+
+    /// `v(x, t, wi)` alone (the direction-only path).
+    fn velocity_only_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<[f32; 2]>;
+
+    /// The base distribution `p0(. | wi)`.
+    fn base_distribution(&self, wi: Vec3) -> Option<BaseDist>;
+
+    /// Writes `x_0 .. x_steps` into `points` (which must hold `steps + 1` points) and
+    /// returns the smallest step determinant `det(I + h dv/dx)` along the way.
+    fn trajectory(&self, wi: Vec3, u: Vec2, steps: u32, points: &mut [[f32; 2]]) -> Option<f32>;
+
+    /// The flow point `x0` that `steps` Euler steps carry to `x`, by the exact inverse.
+    fn invert_flow(&self, wi: Vec3, x: [f32; 2], steps: u32) -> Option<[f32; 2]>;
+}
 
 impl<
         const BE: usize,
@@ -19,40 +39,29 @@ impl<
         const VE: usize,
         const VW: usize,
         const VM: usize,
-    > Model<BE, BW, BM, VE, VW, VM>
+    > Diagnostics for Model<BE, BW, BM, VE, VW, VM>
 {
-    /// `v(x, t, wi)` and the hand-derived `dv/dx` at a flow point `x`.
-    pub fn velocity_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<([f32; 2], Jacobian)> {
+    fn velocity_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<([f32; 2], Jacobian)> {
         let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         let step = self.velocity.at_time(&c.cond, t);
         let (feat, dfeat) = self.def.domain.features_with_derivative(x);
         Some(self.velocity.velocity_jacobian(&step, feat, dfeat))
     }
 
-    /// `v(x, t, wi)` alone (the direction-only path).
-    pub fn velocity_only_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<[f32; 2]> {
+    fn velocity_only_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<[f32; 2]> {
         let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         let step = self.velocity.at_time(&c.cond, t);
         Some(self.velocity.velocity(&step, self.def.domain.features(x)))
     }
 
-    /// The base distribution `p0(. | wi)`.
-    pub fn base_distribution(&self, wi: Vec3) -> Option<BaseDist> {
+    fn base_distribution(&self, wi: Vec3) -> Option<BaseDist> {
         Some(
             self.condition(self.incident_frame(unit_direction(wi)?).1)
                 .base,
         )
     }
 
-    /// Writes `x_0 .. x_steps` into `points` (which must hold `steps + 1` points) and
-    /// returns the smallest step determinant `det(I + h dv/dx)` along the way.
-    pub fn trajectory(
-        &self,
-        wi: Vec3,
-        u: Vec2,
-        steps: u32,
-        points: &mut [[f32; 2]],
-    ) -> Option<f32> {
+    fn trajectory(&self, wi: Vec3, u: Vec2, steps: u32, points: &mut [[f32; 2]]) -> Option<f32> {
         let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         let points = points.get_mut(..steps as usize + 1)?;
         let domain = self.def.domain;
@@ -73,9 +82,30 @@ impl<
         Some(min_det)
     }
 
-    /// The flow point `x0` that `steps` Euler steps carry to `x`, by the exact inverse.
-    pub fn invert_flow(&self, wi: Vec3, x: [f32; 2], steps: u32) -> Option<[f32; 2]> {
+    fn invert_flow(&self, wi: Vec3, x: [f32; 2], steps: u32) -> Option<[f32; 2]> {
         let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         self.flow_inverse(&c, x, steps).map(|(x0, _)| x0)
+    }
+}
+
+impl Diagnostics for AnyModel {
+    fn velocity_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<([f32; 2], Jacobian)> {
+        with_model!(self, m => m.velocity_at(wi, x, t))
+    }
+
+    fn velocity_only_at(&self, wi: Vec3, x: [f32; 2], t: f32) -> Option<[f32; 2]> {
+        with_model!(self, m => m.velocity_only_at(wi, x, t))
+    }
+
+    fn base_distribution(&self, wi: Vec3) -> Option<BaseDist> {
+        with_model!(self, m => m.base_distribution(wi))
+    }
+
+    fn trajectory(&self, wi: Vec3, u: Vec2, steps: u32, points: &mut [[f32; 2]]) -> Option<f32> {
+        with_model!(self, m => m.trajectory(wi, u, steps, points))
+    }
+
+    fn invert_flow(&self, wi: Vec3, x: [f32; 2], steps: u32) -> Option<[f32; 2]> {
+        with_model!(self, m => m.invert_flow(wi, x, steps))
     }
 }

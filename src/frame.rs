@@ -8,11 +8,8 @@
 //! and the reported PDF stays exact.
 
 use crate::math::sqrt;
+use crate::spec::NORMAL_INCIDENCE_RHO;
 use glam::Vec3;
-
-/// Below this `|wi.xy|`, `wi` is the normal to float precision and the frame is the
-/// identity (the nets are continuous in `wi`; both entry points use the same frame).
-pub const NORMAL_INCIDENCE_RHO: f32 = 1e-12;
 
 /// A rotation about the normal by `phi_i`: `cos`/`sin` of the angle of `wi` in the xy-plane.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,11 +1,8 @@
 //! Checks on what callers pass in. Renderers pass unit vectors, but the kernel must answer
 //! non-unit, zero, NaN and infinite inputs with an invalid result, never NaN or a panic.
 
+use crate::spec::UNIT_TOLERANCE;
 use glam::{Vec2, Vec3};
-
-/// A direction is accepted when `| |w|^2 - 1 | <= UNIT_TOLERANCE` (and then normalised):
-/// covers the rounding of any renderer's normalisation, rejects real mistakes.
-pub const UNIT_TOLERANCE: f32 = 1e-3;
 
 /// `w` normalised, or `None` if it is not finite or not close to unit length.
 #[inline]

@@ -28,31 +28,38 @@
 //! Frames: local shading frame, `z` the normal; `wi` points away from the surface.
 
 #![no_std]
-#![deny(unsafe_code)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 #![warn(missing_debug_implementations)]
 // `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values; the
 // "clearer" `x <= 0.0` would let NaN through.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod base;
+mod any_model;
+mod base;
 mod batch;
-pub mod blob;
-pub mod def;
+mod blob;
+mod def;
 mod diagnostics;
-pub mod domain;
+mod domain;
 mod flow;
-pub mod frame;
-pub mod input;
-pub mod math;
+mod frame;
+mod input;
+pub mod internals;
+mod math;
 mod model;
-pub mod net;
+mod net;
 mod sampler;
+pub mod spec;
 
+pub use any_model::AnyModel;
 pub use batch::BatchError;
 pub use blob::BlobError;
-pub use def::{Activation, Domain, ModelDef, ModelName, NetShape, Precision};
+pub use def::{
+    encoding_len, Activation, Domain, Layer, ModelDef, ModelName, Net, NetShape, Precision,
+    NAME_CAPACITY,
+};
 pub use model::{Model, Model3x32, Model4x32, MAX_PARAMS_ON_STACK};
 pub use sampler::Sample;
 
-pub use flow::{NEWTON_MAX_ITERS, NEWTON_TOL};
 pub use glam;

@@ -51,10 +51,6 @@ pub(crate) fn floor(x: f32) -> f32 {
     libm::floorf(x)
 }
 
-/// 1.5 * 2^23: adding and subtracting it rounds an f32 of magnitude < 2^22 to the nearest
-/// integer without a branch or a library call.
-const ROUND_MAGIC: f32 = 12_582_912.0;
-
 /// `exp(x)` for `x` in [-87, 88] (inputs outside are clamped; NaN is never passed here).
 ///
 /// `exp(x) = 2^n * exp(r)` with `n = round(x / ln 2)`, `|r| <= ln(2)/2`, and `exp(r)` by its
@@ -62,11 +58,9 @@ const ROUND_MAGIC: f32 = 12_582_912.0;
 /// loop over a layer vectorises.
 #[inline(always)]
 pub fn exp_poly(x: f32) -> f32 {
+    use crate::spec::{EXP_ARG_MAX, EXP_ARG_MIN, LN2_HI, LN2_LO, ROUND_MAGIC};
     const LOG2E: f32 = core::f32::consts::LOG2_E;
-    // ln 2 split in a part exact in f32 and the remainder (Cody–Waite reduction).
-    const LN2_HI: f32 = 0.693_145_75;
-    const LN2_LO: f32 = 1.428_606_8e-6;
-    let x = x.clamp(-87.0, 88.0);
+    let x = x.clamp(EXP_ARG_MIN, EXP_ARG_MAX);
     let n = (x * LOG2E + ROUND_MAGIC) - ROUND_MAGIC;
     let r = (x - n * LN2_HI) - n * LN2_LO;
     // Horner form of 1 + r + r^2/2 + r^3/6 + r^4/24 + r^5/120 + r^6/720.

@@ -21,7 +21,9 @@ use glam::{Vec2, Vec3};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Sample {
+    /// The sampled direction (unit, local shading frame).
     pub wo: Vec3,
+    /// Its density per unit solid angle.
     pub pdf: f32,
 }
 

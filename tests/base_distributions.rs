@@ -2,7 +2,8 @@
 //! wrapped Cauchy sampling map is the inverse of its CDF, and both log-densities stay
 //! accurate for the sharpest allowed lobes.
 
-use diffbsdf::base::{gaussian, wrapped_cauchy, LN_SCALE_MIN};
+use diffbsdf::internals::base::{gaussian, wrapped_cauchy};
+use diffbsdf::spec::LN_SCALE_MIN;
 
 /// Tail mass down to which the quantile is accurate to 2e-5 (relative).
 const ACCURATE_TAIL: f64 = 2e-8;

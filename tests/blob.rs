@@ -3,7 +3,7 @@
 
 mod support;
 
-use diffbsdf::blob::{blob_len, crc32, write_blob, Blob, CHECKSUM_LEN, HEADER_LEN};
+use diffbsdf::internals::blob::{blob_len, crc32, write_blob, Blob, CHECKSUM_LEN, HEADER_LEN};
 use diffbsdf::{BlobError, Model3x32, Model4x32, ModelName, Precision};
 use proptest::prelude::*;
 use support::{random_disk, random_sphere};

@@ -6,8 +6,8 @@
 
 mod support;
 
-use diffbsdf::frame::IncidentFrame;
 use diffbsdf::glam::{Vec2, Vec3};
+use diffbsdf::internals::frame::IncidentFrame;
 use diffbsdf::{Model3x32, Precision};
 use proptest::prelude::*;
 use support::{
@@ -124,7 +124,7 @@ fn the_isotropic_flag_survives_the_blob_and_changes_the_samples() {
     for precision in [Precision::F32, Precision::F16] {
         let mut out = vec![
             0u8;
-            diffbsdf::blob::blob_len(&{
+            diffbsdf::internals::blob::blob_len(&{
                 let mut d = *iso.def();
                 d.precision = precision;
                 d

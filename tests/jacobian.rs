@@ -3,6 +3,7 @@
 mod support;
 
 use diffbsdf::glam::Vec3;
+use diffbsdf::internals::Diagnostics;
 use proptest::prelude::*;
 use support::{direction, random_disk, random_sphere};
 

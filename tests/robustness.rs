@@ -4,6 +4,7 @@
 mod support;
 
 use diffbsdf::glam::{Vec2, Vec3};
+use diffbsdf::internals::Diagnostics;
 use proptest::prelude::*;
 use support::{random_disk, random_sphere};
 

@@ -4,8 +4,9 @@
 
 mod support;
 
-use diffbsdf::blob::Blob;
 use diffbsdf::glam::{Vec2, Vec3};
+use diffbsdf::internals::blob::Blob;
+use diffbsdf::internals::Diagnostics;
 use diffbsdf::{Domain, Model3x32, Model4x32};
 use std::path::PathBuf;
 use support::{direction, rel, Rng};

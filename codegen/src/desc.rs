@@ -8,8 +8,9 @@
 //! this block, so `docs/codegen.md` can point at one table.
 
 use crate::Error;
-use diffbsdf::blob::Blob;
-use diffbsdf::def::{ModelDef, BASE_OUTPUTS};
+use diffbsdf::internals::blob::Blob;
+use diffbsdf::spec::BASE_OUTPUTS;
+use diffbsdf::ModelDef;
 
 /// A fully connected layer inside the parameter block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

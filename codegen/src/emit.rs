@@ -401,8 +401,8 @@ impl<'a> Emitter<'a> {
         self.code.line(format!("outv[o] = {};", self.to_f("z")));
         self.code.close("}");
         let (lo, hi) = (
-            self.f(diffbsdf::base::LN_SCALE_MIN),
-            self.f(diffbsdf::base::LN_SCALE_MAX),
+            self.f(diffbsdf::spec::LN_SCALE_MIN),
+            self.f(diffbsdf::spec::LN_SCALE_MAX),
         );
         let scales: &[usize] = if self.sphere() { &[1, 3] } else { &[2, 3] };
         for k in 0..4 {
@@ -657,7 +657,7 @@ impl<'a> Emitter<'a> {
         self.code.open(format!("if (u >= {half}) {{"));
         self.code.line(format!("q = {one} - u;"));
         self.code.close("}");
-        let tail = self.f(diffbsdf::base::gaussian::TAIL_MIN);
+        let tail = self.f(diffbsdf::spec::GAUSSIAN_TAIL_MIN);
         self.code
             .line(format!("q = {};", self.d.clamp("q", &tail, &half)));
         let two = self.f(2.0);
@@ -796,7 +796,7 @@ impl<'a> Emitter<'a> {
         let ut = self.st("Unit");
         self.code.line(format!(
             "// w normalised if finite and | |w|^2 - 1 | <= {}, else ok = false.",
-            diffbsdf::input::UNIT_TOLERANCE
+            diffbsdf::spec::UNIT_TOLERANCE
         ));
         self.fn_open(
             ut.clone(),
@@ -809,7 +809,7 @@ impl<'a> Emitter<'a> {
         self.decl(T::F, "l2", "x * x + y * y + z * z");
         let fin = self.d.finite("l2");
         let abs = self.math(Math::Abs, &format!("l2 - {}", self.f(1.0)));
-        let tol = self.f(diffbsdf::input::UNIT_TOLERANCE);
+        let tol = self.f(diffbsdf::spec::UNIT_TOLERANCE);
         self.code.line(format!("r.ok = {fin} && {abs} <= {tol};"));
         let s = format!("{} / {}", self.f(1.0), self.math(Math::Sqrt, "l2"));
         self.decl(T::F, "s", &s);
@@ -937,7 +937,7 @@ impl<'a> Emitter<'a> {
         self.decl(T::F, "rho", &self.math(Math::Sqrt, "x * x + y * y"));
         self.code.open(format!(
             "if (rho > {}) {{",
-            self.f(diffbsdf::frame::NORMAL_INCIDENCE_RHO)
+            self.f(diffbsdf::spec::NORMAL_INCIDENCE_RHO)
         ));
         self.decl(T::F, "inv", &format!("{} / rho", self.f(1.0)));
         self.code.line("f.c = x * inv;");
@@ -1114,7 +1114,7 @@ impl<'a> Emitter<'a> {
         if self.d.half() {
             NEWTON_TOL_F16
         } else {
-            diffbsdf::NEWTON_TOL
+            diffbsdf::spec::NEWTON_TOL
         }
     }
 
@@ -1181,7 +1181,7 @@ impl<'a> Emitter<'a> {
         self.decl(self.st("Residual"), "at", &res);
         let abs = |s: &Self, x: &str| s.math(Math::Abs, x);
         let mx = self.d.math(Math::Max);
-        self.for_open("it", &self.u(diffbsdf::NEWTON_MAX_ITERS as usize));
+        self.for_open("it", &self.u(diffbsdf::spec::NEWTON_MAX_ITERS as usize));
         self.decl(T::F, "d0", "at.r0");
         self.decl(T::F, "d1", "at.r1");
         self.code.open(format!("if (at.det > {zero}) {{"));

@@ -1,7 +1,7 @@
 //! Error paths of the C API called from Rust: every blob error has its own status, bad
 //! pointers and lengths are errors, and invalid numeric input is not.
 
-use diffbsdf::blob::{blob_len, write_blob};
+use diffbsdf::internals::blob::{blob_len, write_blob};
 use diffbsdf::{ModelDef, Precision};
 use diffbsdf_ffi::*;
 use std::ptr::{null, null_mut};
@@ -29,7 +29,7 @@ fn load(bytes: &[u8]) -> diffbsdf_status {
 /// Re-seals a modified blob with a correct checksum, so the header check is what fails.
 fn reseal(mut b: Vec<u8>) -> Vec<u8> {
     let n = b.len() - 4;
-    let crc = diffbsdf::blob::crc32(&b[..n]);
+    let crc = diffbsdf::internals::blob::crc32(&b[..n]);
     b[n..].copy_from_slice(&crc.to_le_bytes());
     b
 }

@@ -10,24 +10,29 @@
 pub mod gaussian;
 pub mod wrapped_cauchy;
 
-use crate::def::{Domain, BASE_OUTPUTS};
+use crate::def::Domain;
 use crate::math::exp;
-
-/// Sharpest scale a base distribution may have: `sigma = gamma = 1e-4`.
-pub const LN_SCALE_MIN: f32 = -9.210_34;
-/// Widest scale: `sigma = gamma = 10`.
-pub const LN_SCALE_MAX: f32 = core::f32::consts::LN_10;
+use crate::spec::{BASE_OUTPUTS, LN_SCALE_MAX, LN_SCALE_MIN};
 
 /// `p0(x0 | wi)` for one `wi`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum BaseDist {
     /// `N(mu_0, sigma_0^2) x N(mu_1, sigma_1^2)` on the plane.
-    Disk { mu: [f32; 2], ln_sigma: [f32; 2] },
+    Disk {
+        /// Means of `x0_0` and `x0_1`.
+        mu: [f32; 2],
+        /// Log standard deviations.
+        ln_sigma: [f32; 2],
+    },
     /// `N(mu_theta, sigma^2)` in theta times wrapped Cauchy `(mu_phi, gamma)` in phi.
     Sphere {
+        /// Mean of theta.
         mu_theta: f32,
+        /// Log standard deviation of theta.
         ln_sigma: f32,
+        /// Centre of phi.
         mu_phi: f32,
+        /// Log scale of the wrapped Cauchy.
         ln_gamma: f32,
     },
 }

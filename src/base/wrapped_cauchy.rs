@@ -11,10 +11,8 @@
 //! (The von Mises law has neither a closed-form inverse CDF nor a stable f16 density.)
 
 use crate::math::{atan2, cos, ln, sin, sinh, tanh};
+use crate::spec::LN_4PI;
 use core::f32::consts::PI;
-
-/// `ln(4 pi)`.
-const LN_4PI: f32 = 2.531_024_3;
 
 /// The offset `d` in (-pi, pi] for `u` in [0, 1].
 ///

@@ -11,11 +11,26 @@ pub enum BlobError {
     /// The format version is not one this kernel reads.
     UnsupportedVersion(u16),
     /// The blob ends before the header, weights and checksum it declares.
-    Truncated { needed: usize, got: usize },
+    Truncated {
+        /// Bytes the header declares.
+        needed: usize,
+        /// Bytes given.
+        got: usize,
+    },
     /// Bytes follow the checksum.
-    TrailingBytes { expected: usize, got: usize },
+    TrailingBytes {
+        /// Bytes the header declares.
+        expected: usize,
+        /// Bytes given.
+        got: usize,
+    },
     /// The CRC-32 over the blob does not match the stored one.
-    ChecksumMismatch { stored: u32, computed: u32 },
+    ChecksumMismatch {
+        /// The CRC-32 at the end of the blob.
+        stored: u32,
+        /// The CRC-32 of the bytes before it.
+        computed: u32,
+    },
     /// The domain byte is not a known domain.
     UnknownDomain(u8),
     /// The precision byte is not a known weight precision.
@@ -26,13 +41,26 @@ pub enum BlobError {
     /// UTF-8, unknown flag bits set, base encoding longer than the velocity encoding...).
     BadHeader(&'static str),
     /// The declared parameter count does not match the declared shape.
-    ParamCountMismatch { declared: u32, from_shape: usize },
+    ParamCountMismatch {
+        /// The count in the header (or given).
+        declared: u32,
+        /// The count the shape implies.
+        from_shape: usize,
+    },
     /// A weight is NaN or infinite.
-    NonFiniteWeight { index: usize },
+    NonFiniteWeight {
+        /// Position of the weight in blob order.
+        index: usize,
+    },
     /// The blob is valid but its shape is not the one this model type was compiled for.
     ShapeMismatch,
     /// The output buffer is too small for the blob being written.
-    BufferTooSmall { needed: usize, got: usize },
+    BufferTooSmall {
+        /// Bytes needed.
+        needed: usize,
+        /// Bytes given.
+        got: usize,
+    },
 }
 
 impl fmt::Display for BlobError {

@@ -28,6 +28,7 @@ pub const CHECKSUM_LEN: usize = 4;
 /// A validated blob: its definition and a view of its weights.
 #[derive(Clone, Copy, Debug)]
 pub struct Blob<'a> {
+    /// The model definition from the header.
     pub def: ModelDef,
     weights: &'a [u8],
 }

@@ -5,13 +5,13 @@ pub mod disk;
 pub mod sphere;
 
 use crate::def::Domain;
-use crate::net::FEATURES;
+use crate::spec::MAX_FEATURES;
 use glam::Vec3;
 
 impl Domain {
     /// Velocity-net features of `x`.
     #[inline(always)]
-    pub(crate) fn features(self, x: [f32; 2]) -> [f32; FEATURES] {
+    pub fn features(self, x: [f32; 2]) -> [f32; MAX_FEATURES] {
         match self {
             Domain::Disk => [x[0], x[1], 0.0],
             Domain::Sphere => [x[0], crate::math::sin(x[1]), crate::math::cos(x[1])],
@@ -20,10 +20,10 @@ impl Domain {
 
     /// Features of `x` and their derivatives along `x_0` and `x_1`.
     #[inline(always)]
-    pub(crate) fn features_with_derivative(
+    pub fn features_with_derivative(
         self,
         x: [f32; 2],
-    ) -> ([f32; FEATURES], [[f32; FEATURES]; 2]) {
+    ) -> ([f32; MAX_FEATURES], [[f32; MAX_FEATURES]; 2]) {
         match self {
             Domain::Disk => ([x[0], x[1], 0.0], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
             Domain::Sphere => {
@@ -35,7 +35,7 @@ impl Domain {
 
     /// `x + d`, with phi wrapped on the sphere.
     #[inline(always)]
-    pub(crate) fn advance(self, x: [f32; 2], d: [f32; 2]) -> [f32; 2] {
+    pub fn advance(self, x: [f32; 2], d: [f32; 2]) -> [f32; 2] {
         match self {
             Domain::Disk => [x[0] + d[0], x[1] + d[1]],
             Domain::Sphere => [x[0] + d[0], sphere::wrap(x[1] + d[1])],
@@ -44,7 +44,7 @@ impl Domain {
 
     /// `a - b`, with the phi difference taken the short way round on the sphere.
     #[inline(always)]
-    pub(crate) fn difference(self, a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
+    pub fn difference(self, a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
         match self {
             Domain::Disk => [a[0] - b[0], a[1] - b[1]],
             Domain::Sphere => [a[0] - b[0], sphere::wrap(a[1] - b[1])],
@@ -54,7 +54,7 @@ impl Domain {
     /// The direction of a flow point, and `ln(pdf_w / pdf_x)` there; `None` outside the
     /// domain.
     #[inline]
-    pub(crate) fn to_direction(self, x: [f32; 2]) -> Option<Vec3> {
+    pub fn to_direction(self, x: [f32; 2]) -> Option<Vec3> {
         match self {
             Domain::Disk => disk::to_direction(x),
             Domain::Sphere => sphere::to_direction(x),
@@ -63,7 +63,7 @@ impl Domain {
 
     /// `ln(pdf_w / pdf_x)` at a flow point already known to be in the domain.
     #[inline]
-    pub(crate) fn ln_measure(self, x: [f32; 2], wo: Vec3) -> f32 {
+    pub fn ln_measure(self, x: [f32; 2], wo: Vec3) -> f32 {
         match self {
             Domain::Disk => disk::ln_measure(wo),
             Domain::Sphere => sphere::ln_measure(x[0]),
@@ -72,7 +72,7 @@ impl Domain {
 
     /// The flow point of a unit direction; `None` where the domain has no density.
     #[inline]
-    pub(crate) fn point_of(self, wo: Vec3) -> Option<[f32; 2]> {
+    pub fn point_of(self, wo: Vec3) -> Option<[f32; 2]> {
         match self {
             Domain::Disk => disk::from_direction(wo),
             Domain::Sphere => sphere::from_direction(wo),

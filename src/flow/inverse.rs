@@ -9,14 +9,7 @@
 use super::{step_det, step_time, Conditioned};
 use crate::math::ln;
 use crate::model::Model;
-
-/// Newton iterations before a step is declared not invertible (typically 2 to 4 are used).
-pub const NEWTON_MAX_ITERS: u32 = 32;
-/// Halvings of a Newton step's length before it is taken anyway.
-const LINE_SEARCH_HALVINGS: u32 = 8;
-/// Newton stops when the update is below `NEWTON_TOL * (1 + |x|)` (max norm); f32 noise in
-/// `x + h v(x)` sits near 3e-7 of that scale.
-pub const NEWTON_TOL: f32 = 1e-6;
+use crate::spec::{LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL};
 
 impl<
         const BE: usize,

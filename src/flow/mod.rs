@@ -7,8 +7,6 @@
 mod forward;
 mod inverse;
 
-pub use inverse::{NEWTON_MAX_ITERS, NEWTON_TOL};
-
 use crate::base::BaseDist;
 use crate::model::Model;
 use crate::net::encoding::{encode_wi, prefix};

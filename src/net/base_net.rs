@@ -2,17 +2,21 @@
 
 use super::activation::silu_layer;
 use super::dense::{Dense, Readout};
-use crate::def::BASE_OUTPUTS;
+use crate::spec::BASE_OUTPUTS;
 
 /// `E` encoding inputs, `M + 1` hidden layers of width `W`, 4 outputs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BaseNet<const E: usize, const W: usize, const M: usize> {
+    /// The first hidden layer, over the `wi` encoding.
     pub first: Dense<E, W>,
+    /// The further hidden layers.
     pub mid: [Dense<W, W>; M],
+    /// The readout: the four base parameters.
     pub out: Readout<W, BASE_OUTPUTS>,
 }
 
 impl<const E: usize, const W: usize, const M: usize> BaseNet<E, W, M> {
+    /// Every parameter zero.
     pub const ZERO: Self = BaseNet {
         first: Dense::ZERO,
         mid: [Dense::ZERO; M],

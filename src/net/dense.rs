@@ -11,6 +11,7 @@ pub struct Dense<const I: usize, const O: usize> {
 }
 
 impl<const I: usize, const O: usize> Dense<I, O> {
+    /// Every parameter zero.
     pub const ZERO: Self = Dense {
         w: [[0.0; O]; I],
         b: [0.0; O],
@@ -99,6 +100,7 @@ pub struct Readout<const I: usize, const O: usize> {
 }
 
 impl<const I: usize, const O: usize> Readout<I, O> {
+    /// Every parameter zero.
     pub const ZERO: Self = Readout {
         w: [[0.0; I]; O],
         b: [0.0; O],

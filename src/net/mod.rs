@@ -8,4 +8,4 @@ pub mod velocity_net;
 
 pub use base_net::BaseNet;
 pub use dense::{Dense, Readout};
-pub use velocity_net::{Jacobian, VelocityNet, FEATURES};
+pub use velocity_net::{Jacobian, VelocityNet};

@@ -11,8 +11,7 @@
 use super::activation::{silu_layer, silu_layer_tangents};
 use super::dense::{Dense, Readout};
 
-/// Flow-state features: `(x, y, 0)` on the disk, `(theta, sin phi, cos phi)` on the sphere.
-pub const FEATURES: usize = 3;
+use crate::spec::MAX_FEATURES;
 
 /// A 2x2 matrix, row-major: `j[r][c] = dv_r / dx_c`.
 pub type Jacobian = [[f32; 2]; 2];
@@ -21,18 +20,21 @@ pub type Jacobian = [[f32; 2]; 2];
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VelocityNet<const E: usize, const W: usize, const M: usize> {
     /// First-layer columns of the state features (the third is zero for disk models).
-    pub wx: [[f32; W]; FEATURES],
+    pub wx: [[f32; W]; MAX_FEATURES],
     /// First-layer column of the time `t`.
     pub wt: [f32; W],
     /// First-layer columns of the `wi` encoding, and the first layer's bias.
     pub wc: Dense<E, W>,
+    /// The further hidden layers.
     pub mid: [Dense<W, W>; M],
+    /// The readout: the velocity.
     pub out: Readout<W, 2>,
 }
 
 impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
+    /// Every parameter zero.
     pub const ZERO: Self = VelocityNet {
-        wx: [[0.0; W]; FEATURES],
+        wx: [[0.0; W]; MAX_FEATURES],
         wt: [0.0; W],
         wc: Dense::ZERO,
         mid: [Dense::ZERO; M],
@@ -56,7 +58,7 @@ impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
     }
 
     #[inline(always)]
-    fn first_layer(&self, step: &[f32; W], feat: [f32; FEATURES]) -> [f32; W] {
+    fn first_layer(&self, step: &[f32; W], feat: [f32; MAX_FEATURES]) -> [f32; W] {
         let mut z = *step;
         for (col, &f) in self.wx.iter().zip(&feat) {
             for (zo, &w) in z.iter_mut().zip(col) {
@@ -68,7 +70,7 @@ impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
 
     /// `v` at state features `feat`, given the step's first-layer part `step`.
     #[inline(always)]
-    pub fn velocity(&self, step: &[f32; W], feat: [f32; FEATURES]) -> [f32; 2] {
+    pub fn velocity(&self, step: &[f32; W], feat: [f32; MAX_FEATURES]) -> [f32; 2] {
         let mut h = self.first_layer(step, feat);
         silu_layer(&mut h);
         for layer in &self.mid {
@@ -83,8 +85,8 @@ impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
     pub fn velocity_jacobian(
         &self,
         step: &[f32; W],
-        feat: [f32; FEATURES],
-        dfeat: [[f32; FEATURES]; 2],
+        feat: [f32; MAX_FEATURES],
+        dfeat: [[f32; MAX_FEATURES]; 2],
     ) -> ([f32; 2], Jacobian) {
         let mut h = self.first_layer(step, feat);
         let mut dh = [[0.0; W]; 2];

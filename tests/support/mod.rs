@@ -2,6 +2,7 @@
 //! generator, and tolerance checks that print what they allowed.
 #![allow(dead_code)]
 
+use diffbsdf::internals::Diagnostics;
 use diffbsdf::{Domain, Model3x32, Model4x32, ModelDef};
 
 /// A small seeded generator (SplitMix64) so tests need no extra crate.

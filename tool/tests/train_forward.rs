@@ -2,8 +2,9 @@
 //! computed by the training MLP on training features, equal what the kernel computes from
 //! the exported parameters.
 
-use diffbsdf::base::BaseDist;
 use diffbsdf::glam::Vec3;
+use diffbsdf::internals::base::BaseDist;
+use diffbsdf::internals::Diagnostics;
 use diffbsdf::Domain;
 use diffbsdf_tool::train::features::{
     base_encoding, push_velocity_row, velocity_encoding, velocity_inputs, BASE_ENC,

@@ -3,8 +3,9 @@
 //! vectors with their edge cases, the tolerance checks and the tools (gcc, g++) runners.
 #![allow(dead_code)]
 
-use diffbsdf::blob::{blob_len, write_blob};
 use diffbsdf::glam::{Vec2, Vec3};
+use diffbsdf::internals::blob::{blob_len, write_blob};
+use diffbsdf::internals::Diagnostics;
 use diffbsdf::{Domain, Model3x32, Model4x32, ModelDef, ModelName, Precision};
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -96,10 +96,10 @@ pub struct Pair {
 
 impl Pair {
     /// The pair turned about the normal so that `wi` has `phi = 0` (the frame of an
-    /// isotropic model, `diffbsdf::frame::IncidentFrame`); unchanged at normal incidence.
+    /// isotropic model, `diffbsdf::internals::frame::IncidentFrame`); unchanged at normal incidence.
     pub fn in_incident_frame(&self) -> Pair {
         let rho = (self.wi.x * self.wi.x + self.wi.y * self.wi.y).sqrt();
-        if !(rho > f64::from(diffbsdf::frame::NORMAL_INCIDENCE_RHO)) {
+        if !(rho > f64::from(diffbsdf::spec::NORMAL_INCIDENCE_RHO)) {
             return *self;
         }
         let (c, s) = (self.wi.x / rho, self.wi.y / rho);

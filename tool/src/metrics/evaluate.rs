@@ -235,8 +235,12 @@ pub fn evaluate(model: &LearnedModel, material: &dyn Material, cfg: &EvalConfig)
             Domain::Sphere => "sphere",
         },
         steps: def.default_steps,
-        blob_bytes_f32: diffbsdf::blob::HEADER_LEN + 4 * params + diffbsdf::blob::CHECKSUM_LEN,
-        blob_bytes_f16: diffbsdf::blob::HEADER_LEN + 2 * params + diffbsdf::blob::CHECKSUM_LEN,
+        blob_bytes_f32: diffbsdf::internals::blob::HEADER_LEN
+            + 4 * params
+            + diffbsdf::internals::blob::CHECKSUM_LEN,
+        blob_bytes_f16: diffbsdf::internals::blob::HEADER_LEN
+            + 2 * params
+            + diffbsdf::internals::blob::CHECKSUM_LEN,
         samples_per_wi: cfg.samples,
         rv_ratio_to_material: learned.rv_mean / material_sampler.rv_mean,
         learned,

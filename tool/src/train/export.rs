@@ -4,8 +4,9 @@
 
 use super::error::TrainError;
 use super::mlp::Mlp;
-use diffbsdf::blob::blob_len;
 use diffbsdf::glam::{Vec2, Vec3};
+use diffbsdf::internals::blob::blob_len;
+use diffbsdf::internals::Diagnostics;
 use diffbsdf::{Domain, Model3x32, Model4x32, ModelDef, ModelName, Precision, Sample};
 
 /// A kernel model of one of the two shipped shapes.

@@ -1,10 +1,10 @@
 //! The inputs the nets see, computed with the kernel's own functions: the NeRF encoding
-//! of `wi` (`diffbsdf::net::encoding::encode_wi`) and the flow-state features (disk:
+//! of `wi` (`diffbsdf::internals::net::encoding::encode_wi`) and the flow-state features (disk:
 //! `x, y`; sphere: `theta, sin phi, cos phi`), plus the domain's point arithmetic
 //! (phi wrapped, geodesic phi differences).
 
-use diffbsdf::domain::sphere::wrap;
-use diffbsdf::net::encoding::encode_wi;
+use diffbsdf::internals::domain::sphere::wrap;
+use diffbsdf::internals::net::encoding::encode_wi;
 use diffbsdf::Domain;
 
 /// Encoding length of the velocity net (5 frequencies).

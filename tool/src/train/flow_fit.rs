@@ -9,7 +9,7 @@ use super::batch::loss_and_grad;
 use super::dataset::TrainingSet;
 use super::features::{difference, interpolate, push_velocity_row, velocity_inputs};
 use super::mlp::Mlp;
-use diffbsdf::base::BaseDist;
+use diffbsdf::internals::base::BaseDist;
 use rand::Rng;
 use rand_pcg::Pcg64;
 

@@ -6,7 +6,7 @@
 //! The activation is the kernel's own `silu` (through `exp_poly`), so the trained net
 //! evaluates as the kernel will evaluate it.
 
-use diffbsdf::net::activation::silu_with_slope;
+use diffbsdf::internals::net::activation::silu_with_slope;
 use rand::Rng;
 use rand_pcg::Pcg64;
 

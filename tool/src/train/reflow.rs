@@ -5,7 +5,7 @@
 use super::dataset::TrainingSet;
 use super::features::{advance, push_velocity_row};
 use super::mlp::{Mlp, Tape};
-use diffbsdf::base::BaseDist;
+use diffbsdf::internals::base::BaseDist;
 use diffbsdf::Domain;
 use rand::Rng;
 use rand_pcg::Pcg64;

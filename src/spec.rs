@@ -1,0 +1,147 @@
+//! The specification: every constant that the kernel, the generated GLSL / WGSL / C, the
+//! trainer and the tests must agree on, in one place.
+//!
+//! The kernel computes with these values; the code generator prints them into the code it
+//! emits; the trainer and the tests read them. Nothing outside this module writes one of
+//! them again. `docs/math.md` defines where each one enters the model.
+//!
+//! A renderer never needs this module: it is public so that other implementations (the
+//! generated code, a port) can be checked against the kernel.
+
+// ---------------------------------------------------------------------------------------
+// Network shapes
+// ---------------------------------------------------------------------------------------
+
+/// Flow-state features the velocity net's first layer has columns for: `(x, y, 0)` on the
+/// disk (2 used), `(theta, sin phi, cos phi)` on the sphere (3 used).
+pub const MAX_FEATURES: usize = 3;
+
+/// Outputs of the base net: two location and two log-scale parameters
+/// (`docs/math.md`, "Base distribution").
+pub const BASE_OUTPUTS: usize = 4;
+
+/// Outputs of the velocity net: the velocity `v = (v_0, v_1)` in flow coordinates.
+pub const VELOCITY_OUTPUTS: usize = 2;
+
+/// Inputs of the `wi` encoding that are the raw direction (`wi.x, wi.y, wi.z`).
+pub const ENCODING_RAW: usize = 3;
+
+/// Sine-cosine pairs per axis and frequency in the `wi` encoding (one sine, one cosine per
+/// axis: `6 = 2 * 3` values per frequency).
+pub const ENCODING_PER_FREQ: usize = 6;
+
+// ---------------------------------------------------------------------------------------
+// Activation: SiLU with the kernel's polynomial exp
+// ---------------------------------------------------------------------------------------
+
+/// `exp_poly(x)` clamps `x` to `[EXP_ARG_MIN, EXP_ARG_MAX]` (f32: `e^x` stays normal).
+pub const EXP_ARG_MIN: f32 = -87.0;
+/// Upper clamp of `exp_poly`'s argument.
+pub const EXP_ARG_MAX: f32 = 88.0;
+/// Clamp of the sigmoid's exponent in f16 shaders: `e^11 < 65504` (moves sigmoid < 2e-5).
+pub const EXP_ARG_LIMIT_F16: f32 = 11.0;
+/// `ln 2` split into a part exact in f32 and the remainder (Cody-Waite reduction).
+pub const LN2_HI: f32 = 0.693_145_75;
+/// The remainder of `ln 2 - LN2_HI`.
+pub const LN2_LO: f32 = 1.428_606_8e-6;
+/// `1.5 * 2^23`: adding and subtracting it rounds an f32 of magnitude `< 2^22` to the
+/// nearest integer without a branch.
+pub const ROUND_MAGIC: f32 = 12_582_912.0;
+
+// ---------------------------------------------------------------------------------------
+// Inputs
+// ---------------------------------------------------------------------------------------
+
+/// A direction is accepted when `| |w|^2 - 1 | <= UNIT_TOLERANCE` (and then normalised).
+pub const UNIT_TOLERANCE: f32 = 1e-3;
+
+/// Below this `|wi.xy|`, `wi` is the normal and the incident frame of an isotropic model is
+/// the identity.
+pub const NORMAL_INCIDENCE_RHO: f32 = 1e-12;
+
+// ---------------------------------------------------------------------------------------
+// Base distributions
+// ---------------------------------------------------------------------------------------
+
+/// Sharpest scale a base distribution may have: `ln(1e-4)` (sigma or gamma).
+pub const LN_SCALE_MIN: f32 = -9.210_34;
+/// Widest scale: `ln(10)`.
+pub const LN_SCALE_MAX: f32 = core::f32::consts::LN_10;
+
+/// Smallest tail probability the normal quantile is evaluated at (`2^-40`): `u` closer
+/// than this to 0 or 1 maps to `|z| = 7.1`.
+pub const GAUSSIAN_TAIL_MIN: f32 = 9.094_947e-13;
+
+/// `ln(1/sqrt(2 pi))`, the normal log-density's constant.
+pub const LN_INV_SQRT_2PI: f32 = -0.918_938_5;
+
+/// `ln(4 pi)`, the wrapped Cauchy log-density's constant.
+pub const LN_4PI: f32 = 2.531_024_3;
+
+/// Giles' single-precision erfinv: the central branch is taken while
+/// `w = -ln(4 q (1 - q)) < ERFINV_BRANCH_W`.
+pub const ERFINV_BRANCH_W: f32 = 5.0;
+/// The central branch's polynomial is in `w - ERFINV_CENTRAL_SHIFT`.
+pub const ERFINV_CENTRAL_SHIFT: f32 = 2.5;
+/// Central-branch coefficients, highest degree first (Horner: `p = c[0]`, then
+/// `p = c[k] + p * w`).
+pub const ERFINV_CENTRAL: [f32; 9] = [
+    2.810_226_4e-8,
+    3.432_739_4e-7,
+    -3.523_387_7e-6,
+    -4.391_506_5e-6,
+    2.185_808_7e-4,
+    -1.253_725e-3,
+    -4.177_681_6e-3,
+    0.246_640_73,
+    1.501_409_4,
+];
+/// The tail branch's polynomial is in `sqrt(w) - ERFINV_TAIL_SHIFT`.
+pub const ERFINV_TAIL_SHIFT: f32 = 3.0;
+/// Tail-branch coefficients, highest degree first.
+pub const ERFINV_TAIL: [f32; 9] = [
+    -2.002_142_6e-4,
+    1.009_505_6e-4,
+    1.349_343_2e-3,
+    -3.673_428_4e-3,
+    5.739_507_7e-3,
+    -7.622_461_3e-3,
+    9.438_870_5e-3,
+    1.001_674,
+    2.832_976_8,
+];
+
+// ---------------------------------------------------------------------------------------
+// The exact inverse (Newton on each Euler step)
+// ---------------------------------------------------------------------------------------
+
+/// Newton iterations before a step is declared not invertible (typically 2 to 4 are used).
+pub const NEWTON_MAX_ITERS: u32 = 32;
+/// Halvings of a Newton step's length before it is taken anyway.
+pub const LINE_SEARCH_HALVINGS: u32 = 8;
+/// Newton stops when the update is below `NEWTON_TOL * (1 + |x|)` (max norm); f32 noise in
+/// `x + h v(x)` sits near 3e-7 of that scale.
+pub const NEWTON_TOL: f32 = 1e-6;
+/// Newton tolerance of the generated f16 inverse: an f16 velocity is a step function of
+/// `x` at about 1e-3 of its size, so [`NEWTON_TOL`] cannot be reached there.
+pub const NEWTON_TOL_F16: f32 = 2e-3;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_ln2_sums_to_ln2() {
+        let sum = LN2_HI as f64 + LN2_LO as f64;
+        assert!((sum - core::f64::consts::LN_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn log_constants_match_their_definitions() {
+        let pi = core::f64::consts::PI;
+        assert!((LN_INV_SQRT_2PI as f64 + 0.5 * libm::log(2.0 * pi)).abs() < 1e-7);
+        assert!((LN_4PI as f64 - libm::log(4.0 * pi)).abs() < 1e-6);
+        assert!((LN_SCALE_MIN as f64 - libm::log(1e-4)).abs() < 1e-5);
+        assert_eq!(GAUSSIAN_TAIL_MIN, 1.0 / (1u64 << 40) as f32);
+    }
+}
