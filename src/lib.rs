@@ -63,3 +63,8 @@ pub use model::{Model, Model3x32, Model4x32, MAX_PARAMS_ON_STACK};
 pub use sampler::Sample;
 
 pub use glam;
+
+/// The README's Rust example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctest;

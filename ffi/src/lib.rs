@@ -17,7 +17,8 @@
 mod model;
 mod status;
 
-pub use model::AnyModel;
+use diffbsdf::{AnyModel, NAME_CAPACITY};
+use model::resolve_steps;
 pub use status::diffbsdf_status;
 
 use core::ffi::c_char;
@@ -57,7 +58,7 @@ pub struct diffbsdf_info {
     /// 1 when the model is isotropic (its nets see `wi` turned to `phi = 0`).
     pub isotropic: u32,
     /// The model's name, NUL-terminated.
-    pub name: [c_char; 33],
+    pub name: [c_char; NAME_CAPACITY + 1],
 }
 
 const _: () = assert!(size_of::<diffbsdf_sample_result>() == size_of::<Sample>());
@@ -264,7 +265,7 @@ pub unsafe extern "C" fn diffbsdf_model_info(
         let m = unsafe { model_ref(model) }?;
         check(out.cast_const())?;
         let def = m.def();
-        let mut name = [0 as c_char; 33];
+        let mut name = [0 as c_char; NAME_CAPACITY + 1];
         for (n, b) in name.iter_mut().zip(def.name.as_bytes()) {
             *n = *b as c_char;
         }
@@ -305,9 +306,10 @@ pub unsafe extern "C" fn diffbsdf_sample_direction(
     guard(|| {
         // SAFETY: forwarded contract for every pointer.
         let m = unsafe { model_ref(model) }?;
+        let steps = resolve_steps(m, steps);
         let (wi, u) = unsafe { (read::<3>(wi)?, read::<2>(u)?) };
         check(wo.cast_const())?;
-        let d = m.sample_direction(Vec3::from(wi), Vec2::from(u), steps);
+        let d = m.sample_direction_steps(Vec3::from(wi), Vec2::from(u), steps);
         unsafe { write(wo, d.unwrap_or(Vec3::ZERO).to_array()) }?;
         Ok(if d.is_some() {
             S::DIFFBSDF_OK
@@ -332,9 +334,10 @@ pub unsafe extern "C" fn diffbsdf_sample(
     guard(|| {
         // SAFETY: forwarded contract for every pointer.
         let m = unsafe { model_ref(model) }?;
+        let steps = resolve_steps(m, steps);
         let (wi, u) = unsafe { (read::<3>(wi)?, read::<2>(u)?) };
         check(out.cast_const())?;
-        let s = m.sample(Vec3::from(wi), Vec2::from(u), steps);
+        let s = m.sample_steps(Vec3::from(wi), Vec2::from(u), steps);
         let c = to_c(s);
         // SAFETY: non-null, aligned (checked), writable by contract.
         unsafe { out.write(c) };
@@ -361,8 +364,9 @@ pub unsafe extern "C" fn diffbsdf_pdf(
     guard(|| {
         // SAFETY: forwarded contract for every pointer.
         let m = unsafe { model_ref(model) }?;
+        let steps = resolve_steps(m, steps);
         let (wi, wo) = unsafe { (read::<3>(wi)?, read::<3>(wo)?) };
-        let p = m.pdf(Vec3::from(wi), Vec3::from(wo), steps);
+        let p = m.pdf_steps(Vec3::from(wi), Vec3::from(wo), steps);
         unsafe { write::<1>(pdf, [p]) }?;
         Ok(S::DIFFBSDF_OK)
     })
@@ -406,10 +410,11 @@ pub unsafe extern "C" fn diffbsdf_sample_direction_batch(
     guard(|| {
         // SAFETY: forwarded contract for every pointer; offsets stay within `count`.
         let m = unsafe { model_ref(model) }?;
+        let steps = resolve_steps(m, steps);
         check_batch(count, [(wi, 3), (u, 2)], (wo.cast_const(), 3))?;
         for i in 0..count {
             let (a, b) = unsafe { (read::<3>(wi.add(3 * i))?, read::<2>(u.add(2 * i))?) };
-            let d = m.sample_direction(Vec3::from(a), Vec2::from(b), steps);
+            let d = m.sample_direction_steps(Vec3::from(a), Vec2::from(b), steps);
             unsafe { write(wo.add(3 * i), d.unwrap_or(Vec3::ZERO).to_array()) }?;
         }
         Ok(S::DIFFBSDF_OK)
@@ -432,11 +437,12 @@ pub unsafe extern "C" fn diffbsdf_sample_batch(
     guard(|| {
         // SAFETY: forwarded contract for every pointer; offsets stay within `count`.
         let m = unsafe { model_ref(model) }?;
+        let steps = resolve_steps(m, steps);
         check_batch(count, [(wi, 3), (u, 2)], (out.cast_const().cast(), 4))?;
         check(out.cast_const())?;
         for i in 0..count {
             let (a, b) = unsafe { (read::<3>(wi.add(3 * i))?, read::<2>(u.add(2 * i))?) };
-            let s = to_c(m.sample(Vec3::from(a), Vec2::from(b), steps));
+            let s = to_c(m.sample_steps(Vec3::from(a), Vec2::from(b), steps));
             unsafe { out.add(i).write(s) };
         }
         Ok(S::DIFFBSDF_OK)
@@ -459,10 +465,11 @@ pub unsafe extern "C" fn diffbsdf_pdf_batch(
     guard(|| {
         // SAFETY: forwarded contract for every pointer; offsets stay within `count`.
         let m = unsafe { model_ref(model) }?;
+        let steps = resolve_steps(m, steps);
         check_batch(count, [(wi, 3), (wo, 3)], (pdf.cast_const(), 1))?;
         for i in 0..count {
             let (a, b) = unsafe { (read::<3>(wi.add(3 * i))?, read::<3>(wo.add(3 * i))?) };
-            let p = m.pdf(Vec3::from(a), Vec3::from(b), steps);
+            let p = m.pdf_steps(Vec3::from(a), Vec3::from(b), steps);
             unsafe { pdf.add(i).write(p) };
         }
         Ok(S::DIFFBSDF_OK)

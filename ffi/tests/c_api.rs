@@ -89,6 +89,14 @@ fn header_version_matches_crate() {
 }
 
 #[test]
+fn header_agrees_with_the_kernel_definition() {
+    let header = std::fs::read_to_string(crate_dir().join("include/diffbsdf.h")).expect("header");
+    // The info struct's name holds the kernel's longest name and a NUL.
+    let name = format!("char name[{}];", diffbsdf::NAME_CAPACITY + 1);
+    assert!(header.contains(&name), "header lacks `{name}`");
+}
+
+#[test]
 fn header_lists_every_status() {
     let header = std::fs::read_to_string(crate_dir().join("include/diffbsdf.h")).expect("header");
     for s in diffbsdf_ffi::diffbsdf_status::ALL {

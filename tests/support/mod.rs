@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use diffbsdf::internals::Diagnostics;
-use diffbsdf::{Domain, Model3x32, Model4x32, ModelDef};
+use diffbsdf::{Domain, Model3x32, Model4x32, ModelDef, Net};
 
 /// A small seeded generator (SplitMix64) so tests need no extra crate.
 pub struct Rng(u64);
@@ -35,25 +35,13 @@ impl Rng {
 /// Largest `h * |dv/dx|_2` allowed over the probe grid: keeps steps far from folding.
 const STEP_STRETCH: f32 = 0.6;
 
-/// Layer sizes of a velocity net in blob order: (rows, cols) of each weight matrix.
-fn velocity_layers(def: &ModelDef) -> Vec<(usize, usize)> {
-    let w = def.velocity.width as usize;
-    let mut layers = vec![(w, def.velocity_inputs())];
-    for _ in 1..def.velocity.hidden_layers {
-        layers.push((w, w));
-    }
-    layers.push((2, w));
-    layers
-}
-
-fn base_layers(def: &ModelDef) -> Vec<(usize, usize)> {
-    let w = def.base.width as usize;
-    let mut layers = vec![(w, def.base.encoding_len())];
-    for _ in 1..def.base.hidden_layers {
-        layers.push((w, w));
-    }
-    layers.push((4, w));
-    layers
+/// Weight-matrix sizes of `net` in blob order, `(rows, cols)` = `(outputs, inputs)`, from the
+/// kernel's layer description.
+fn layers(def: &ModelDef, net: Net) -> Vec<(usize, usize)> {
+    (0..def.layer_count(net))
+        .filter_map(|i| def.layer(net, i))
+        .map(|l| (l.outputs, l.inputs))
+        .collect()
 }
 
 /// Parameters of a random model in blob order.
@@ -64,7 +52,7 @@ fn base_layers(def: &ModelDef) -> Vec<(usize, usize)> {
 pub fn random_params(def: &ModelDef, rng: &mut Rng, min_scale: f32) -> Vec<f32> {
     let mut params = Vec::with_capacity(def.param_count());
     // Base net: small weights, biases of the readout set the distribution.
-    let layers = base_layers(def);
+    let layers = layers(def, Net::Base);
     for (li, &(rows, cols)) in layers.iter().enumerate() {
         let last = li + 1 == layers.len();
         let scale = if last { 0.1 } else { 1.0 } / (cols as f32).sqrt();
@@ -81,7 +69,7 @@ pub fn random_params(def: &ModelDef, rng: &mut Rng, min_scale: f32) -> Vec<f32> 
     }
     // Velocity net.
     let features = def.domain.feature_count();
-    for (li, &(rows, cols)) in velocity_layers(def).iter().enumerate() {
+    for (li, &(rows, cols)) in layers(def, Net::Velocity).iter().enumerate() {
         let scale = 1.7 / (cols as f32).sqrt();
         for _ in 0..rows {
             for c in 0..cols {
