@@ -20,8 +20,13 @@ fi
 rustup target list --installed | grep -q thumbv7em-none-eabihf || rustup target add thumbv7em-none-eabihf
 rustup component list --installed | grep -q rustfmt || rustup component add rustfmt
 rustup component list --installed | grep -q clippy || rustup component add clippy
+# The declared minimum Rust version (one home: `rust-version` in Cargo.toml) is built, not assumed.
+msrv=$(sed -n 's/^rust-version = "\(.*\)"/\1/p' Cargo.toml)
+rustup toolchain list | grep -q "^${msrv}-" || rustup toolchain install "$msrv" --profile minimal
 
 echo "== format";  cargo fmt --all -- --check
 echo "== clippy";  cargo clippy --workspace --all-targets -- -D warnings
 echo "== no_std kernel on bare metal"; cargo build -p diffbsdf --target thumbv7em-none-eabihf
+echo "== kernel and C ABI on Rust $msrv"; CARGO_TARGET_DIR=target/msrv cargo +"$msrv" build -p diffbsdf -p diffbsdf-ffi
+echo "== docs";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p diffbsdf -p diffbsdf-ffi -p diffbsdf-codegen
 echo "== tests";   cargo test --release --workspace

@@ -30,7 +30,6 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
-#![warn(missing_debug_implementations)]
 // `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values; the
 // "clearer" `x <= 0.0` would let NaN through.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

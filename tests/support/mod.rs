@@ -37,7 +37,7 @@ const STEP_STRETCH: f32 = 0.6;
 
 /// Weight-matrix sizes of `net` in blob order, `(rows, cols)` = `(outputs, inputs)`, from the
 /// kernel's layer description.
-fn layers(def: &ModelDef, net: Net) -> Vec<(usize, usize)> {
+fn weight_shapes(def: &ModelDef, net: Net) -> Vec<(usize, usize)> {
     (0..def.layer_count(net))
         .filter_map(|i| def.layer(net, i))
         .map(|l| (l.outputs, l.inputs))
@@ -52,7 +52,7 @@ fn layers(def: &ModelDef, net: Net) -> Vec<(usize, usize)> {
 pub fn random_params(def: &ModelDef, rng: &mut Rng, min_scale: f32) -> Vec<f32> {
     let mut params = Vec::with_capacity(def.param_count());
     // Base net: small weights, biases of the readout set the distribution.
-    let layers = layers(def, Net::Base);
+    let layers = weight_shapes(def, Net::Base);
     for (li, &(rows, cols)) in layers.iter().enumerate() {
         let last = li + 1 == layers.len();
         let scale = if last { 0.1 } else { 1.0 } / (cols as f32).sqrt();
@@ -69,7 +69,7 @@ pub fn random_params(def: &ModelDef, rng: &mut Rng, min_scale: f32) -> Vec<f32> 
     }
     // Velocity net.
     let features = def.domain.feature_count();
-    for (li, &(rows, cols)) in layers(def, Net::Velocity).iter().enumerate() {
+    for (li, &(rows, cols)) in weight_shapes(def, Net::Velocity).iter().enumerate() {
         let scale = 1.7 / (cols as f32).sqrt();
         for _ in 0..rows {
             for c in 0..cols {
