@@ -16,6 +16,7 @@ pub enum Domain {
 impl Domain {
     /// Number of flow-state features the velocity net sees: `(x, y)` on the disk,
     /// `(theta, sin phi, cos phi)` on the sphere.
+    #[must_use]
     pub const fn feature_count(self) -> usize {
         match self {
             Domain::Disk => 2,
@@ -51,6 +52,7 @@ pub enum Precision {
 
 impl Precision {
     /// Bytes per stored weight.
+    #[must_use]
     pub const fn bytes(self) -> usize {
         match self {
             Precision::F32 => 4,
@@ -172,11 +174,13 @@ impl ModelName {
     };
 
     /// A name from a string; `None` if it is longer than [`NAME_CAPACITY`] bytes.
+    #[must_use]
     pub fn new(name: &str) -> Option<Self> {
         Self::from_bytes(name.as_bytes())
     }
 
     /// A name from bytes; `None` if too long or not UTF-8.
+    #[must_use]
     pub fn from_bytes(raw: &[u8]) -> Option<Self> {
         if raw.len() > NAME_CAPACITY || core::str::from_utf8(raw).is_err() {
             return None;
@@ -190,11 +194,13 @@ impl ModelName {
     }
 
     /// The name as text.
+    #[must_use]
     pub fn as_str(&self) -> &str {
         core::str::from_utf8(self.as_bytes()).unwrap_or("")
     }
 
     /// The name's bytes.
+    #[must_use]
     pub fn as_bytes(&self) -> &[u8] {
         self.bytes.get(..self.len as usize).unwrap_or(&[])
     }
@@ -225,6 +231,7 @@ pub struct ModelDef {
 impl ModelDef {
     /// The paper's disk model: base 1x16 (3 frequencies), velocity 3x32 (5 frequencies),
     /// 4 Euler steps.
+    #[must_use]
     pub const fn paper_disk() -> Self {
         ModelDef {
             domain: Domain::Disk,
@@ -247,6 +254,7 @@ impl ModelDef {
     }
 
     /// The paper's sphere model: as the disk model but velocity 4x32 and 8 Euler steps.
+    #[must_use]
     pub const fn paper_sphere() -> Self {
         let mut def = Self::paper_disk();
         def.domain = Domain::Sphere;

@@ -24,6 +24,7 @@ impl IncidentFrame {
 
     /// The frame in which `wi` (unit) has `phi = 0`.
     #[inline]
+    #[must_use]
     pub fn aligning(wi: Vec3) -> Self {
         // rho = |wi.xy|, (cos phi_i, sin phi_i) = wi.xy / rho
         let rho = sqrt(wi.x * wi.x + wi.y * wi.y);
@@ -39,6 +40,7 @@ impl IncidentFrame {
 
     /// `R(-phi_i) v`: a world vector in the frame.
     #[inline(always)]
+    #[must_use]
     pub fn to_local(&self, v: Vec3) -> Vec3 {
         Vec3::new(
             self.cos * v.x + self.sin * v.y,
@@ -49,6 +51,7 @@ impl IncidentFrame {
 
     /// `R(phi_i) v`: a frame vector back in the world.
     #[inline(always)]
+    #[must_use]
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         Vec3::new(
             self.cos * v.x - self.sin * v.y,

@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 
 /// `w` normalised, or `None` if it is not finite or not close to unit length.
 #[inline]
+#[must_use]
 pub fn unit_direction(w: Vec3) -> Option<Vec3> {
     if !w.is_finite() {
         return None;
@@ -19,6 +20,7 @@ pub fn unit_direction(w: Vec3) -> Option<Vec3> {
 
 /// `u` as an array, or `None` unless both numbers lie in [0, 1].
 #[inline]
+#[must_use]
 pub fn uniform_pair(u: Vec2) -> Option<[f32; 2]> {
     let ok = |x: f32| (0.0..=1.0).contains(&x);
     (ok(u.x) && ok(u.y)).then_some([u.x, u.y])

@@ -40,6 +40,7 @@ impl<
     > Model<BE, BW, BM, VE, VW, VM>
 {
     /// Whether a model of definition `def` has this type's compiled shape.
+    #[must_use]
     pub const fn accepts(def: &ModelDef) -> bool {
         encoding_len(def.base.freqs) == BE
             && def.base.width as usize == BW
@@ -139,6 +140,7 @@ impl<
     }
 
     /// The definition.
+    #[must_use]
     pub fn def(&self) -> &ModelDef {
         &self.def
     }
@@ -147,16 +149,6 @@ impl<
     pub fn set_metadata(&mut self, name: crate::def::ModelName, default_steps: u16) {
         self.def.name = name;
         self.def.default_steps = default_steps.max(1);
-    }
-
-    /// The base net.
-    pub fn base_net(&self) -> &BaseNet<BE, BW, BM> {
-        &self.base
-    }
-
-    /// The velocity net.
-    pub fn velocity_net(&self) -> &VelocityNet<VE, VW, VM> {
-        &self.velocity
     }
 
     /// Visits every parameter in blob order (`docs/blob-format.md`).

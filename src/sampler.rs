@@ -35,6 +35,7 @@ impl Sample {
     };
 
     /// Whether this is a real sample (`pdf > 0`).
+    #[must_use]
     pub fn is_valid(&self) -> bool {
         self.pdf > 0.0
     }
@@ -50,30 +51,35 @@ impl<
     > Model<BE, BW, BM, VE, VW, VM>
 {
     /// The model's default number of Euler steps.
+    #[must_use]
     pub fn default_steps(&self) -> u32 {
         self.def.default_steps as u32
     }
 
     /// A direction for `wi` and `u in [0,1]^2`, without its PDF.
     #[inline]
+    #[must_use]
     pub fn sample_direction(&self, wi: Vec3, u: Vec2) -> Option<Vec3> {
         self.sample_direction_steps(wi, u, self.default_steps())
     }
 
     /// A direction and its PDF.
     #[inline]
+    #[must_use]
     pub fn sample(&self, wi: Vec3, u: Vec2) -> Option<Sample> {
         self.sample_steps(wi, u, self.default_steps())
     }
 
     /// The PDF (per unit solid angle) with which `sample` produces `wo` for `wi`.
     #[inline]
+    #[must_use]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         self.pdf_steps(wi, wo, self.default_steps())
     }
 
     /// [`Model::sample_direction`] with `steps` Euler steps (`steps >= 1`).
     #[inline]
+    #[must_use]
     pub fn sample_direction_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Vec3> {
         let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
         if steps == 0 {
@@ -88,6 +94,7 @@ impl<
 
     /// [`Model::sample`] with `steps` Euler steps (`steps >= 1`).
     #[inline]
+    #[must_use]
     pub fn sample_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Sample> {
         let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
         if steps == 0 {
@@ -107,6 +114,7 @@ impl<
 
     /// [`Model::pdf`] with `steps` Euler steps (`steps >= 1`); 0 for invalid input.
     #[inline]
+    #[must_use]
     pub fn pdf_steps(&self, wi: Vec3, wo: Vec3, steps: u32) -> f32 {
         self.pdf_inner(wi, wo, steps).unwrap_or(0.0)
     }

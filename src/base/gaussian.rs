@@ -12,6 +12,7 @@ use crate::spec::{
 /// GPU Computing Gems, 2011), with `w = -ln((1 - x)(1 + x)) = -ln(4 q (1 - q))` computed
 /// from the tail probability `q = min(u, 1 - u)` so that no precision is lost near 0 or 1.
 #[inline]
+#[must_use]
 pub fn quantile(u: f32) -> f32 {
     let q = if u < 0.5 { u } else { 1.0 - u };
     // `u` closer than GAUSSIAN_TAIL_MIN to 0 or 1 maps to |z| = 7.1: keeps `u = 0` finite;
@@ -46,6 +47,7 @@ fn horner(c: &[f32], w: f32) -> f32 {
 
 /// `ln N(z; 0, 1) = -z^2/2 - ln sqrt(2 pi)`.
 #[inline(always)]
+#[must_use]
 pub fn ln_pdf(z: f32) -> f32 {
     -0.5 * z * z + LN_INV_SQRT_2PI
 }

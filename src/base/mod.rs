@@ -40,6 +40,7 @@ pub enum BaseDist {
 impl BaseDist {
     /// The distribution from the base net's raw outputs.
     #[inline]
+    #[must_use]
     pub fn from_net(domain: Domain, out: [f32; BASE_OUTPUTS]) -> Self {
         let clamp = |s: f32| s.clamp(LN_SCALE_MIN, LN_SCALE_MAX);
         match domain {
@@ -58,6 +59,7 @@ impl BaseDist {
 
     /// `x0` for `u` (phi is not wrapped here; the flow wraps it).
     #[inline]
+    #[must_use]
     pub fn sample(&self, u: [f32; 2]) -> [f32; 2] {
         match *self {
             BaseDist::Disk { mu, ln_sigma } => [
@@ -78,6 +80,7 @@ impl BaseDist {
 
     /// `ln p0(x0)` (density in the flow's coordinates).
     #[inline]
+    #[must_use]
     pub fn ln_pdf(&self, x0: [f32; 2]) -> f32 {
         match *self {
             BaseDist::Disk { mu, ln_sigma } => {

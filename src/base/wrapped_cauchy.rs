@@ -19,6 +19,7 @@ use core::f32::consts::PI;
 /// `tan(pi (u - 1/2)) = -cos(pi u) / sin(pi u)`, so `d / 2 = atan2(-tanh(gamma/2) cos(pi u),
 /// sin(pi u))`: `sin(pi u) >= 0` on [0, 1) in f32, and `u = 0` gives `d = -pi` exactly.
 #[inline]
+#[must_use]
 pub fn sample(u: f32, gamma: f32) -> f32 {
     let a = PI * u;
     2.0 * atan2(-tanh(0.5 * gamma) * cos(a), sin(a))
@@ -26,6 +27,7 @@ pub fn sample(u: f32, gamma: f32) -> f32 {
 
 /// `ln p(d)` for an offset `d` (any real; the density is 2 pi periodic).
 #[inline]
+#[must_use]
 pub fn ln_pdf(d: f32, gamma: f32) -> f32 {
     let sh = sinh(0.5 * gamma);
     let sd = sin(0.5 * d);

@@ -11,6 +11,7 @@ use glam::Vec3;
 impl Domain {
     /// Velocity-net features of `x`.
     #[inline(always)]
+    #[must_use]
     pub fn features(self, x: [f32; 2]) -> [f32; MAX_FEATURES] {
         match self {
             Domain::Disk => [x[0], x[1], 0.0],
@@ -20,6 +21,7 @@ impl Domain {
 
     /// Features of `x` and their derivatives along `x_0` and `x_1`.
     #[inline(always)]
+    #[must_use]
     pub fn features_with_derivative(
         self,
         x: [f32; 2],
@@ -35,6 +37,7 @@ impl Domain {
 
     /// `x + d`, with phi wrapped on the sphere.
     #[inline(always)]
+    #[must_use]
     pub fn advance(self, x: [f32; 2], d: [f32; 2]) -> [f32; 2] {
         match self {
             Domain::Disk => [x[0] + d[0], x[1] + d[1]],
@@ -44,6 +47,7 @@ impl Domain {
 
     /// `a - b`, with the phi difference taken the short way round on the sphere.
     #[inline(always)]
+    #[must_use]
     pub fn difference(self, a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
         match self {
             Domain::Disk => [a[0] - b[0], a[1] - b[1]],
@@ -54,6 +58,7 @@ impl Domain {
     /// The direction of a flow point, and `ln(pdf_w / pdf_x)` there; `None` outside the
     /// domain.
     #[inline]
+    #[must_use]
     pub fn to_direction(self, x: [f32; 2]) -> Option<Vec3> {
         match self {
             Domain::Disk => disk::to_direction(x),
@@ -63,6 +68,7 @@ impl Domain {
 
     /// `ln(pdf_w / pdf_x)` at a flow point already known to be in the domain.
     #[inline]
+    #[must_use]
     pub fn ln_measure(self, x: [f32; 2], wo: Vec3) -> f32 {
         match self {
             Domain::Disk => disk::ln_measure(wo),
@@ -72,6 +78,7 @@ impl Domain {
 
     /// The flow point of a unit direction; `None` where the domain has no density.
     #[inline]
+    #[must_use]
     pub fn point_of(self, wo: Vec3) -> Option<[f32; 2]> {
         match self {
             Domain::Disk => disk::from_direction(wo),

@@ -9,12 +9,14 @@ use glam::Vec3;
 
 /// `phi` wrapped into [-pi, pi).
 #[inline(always)]
+#[must_use]
 pub fn wrap(phi: f32) -> f32 {
     phi - TAU * floor((phi + PI) * (1.0 / TAU))
 }
 
 /// The direction of `(theta, phi)`; `None` unless `sin(theta) > 0` (theta in (0, pi)).
 #[inline]
+#[must_use]
 pub fn to_direction(x: [f32; 2]) -> Option<Vec3> {
     let (st, ct) = (sin(x[0]), cos(x[0]));
     if !(st > 0.0 && x[0] > 0.0 && x[0] < PI) {
@@ -26,6 +28,7 @@ pub fn to_direction(x: [f32; 2]) -> Option<Vec3> {
 /// `(theta, phi)` of a unit direction; `None` on the poles, where `phi` is undefined and
 /// the density in solid angle is singular.
 #[inline]
+#[must_use]
 pub fn from_direction(wo: Vec3) -> Option<[f32; 2]> {
     let rho = sqrt(wo.x * wo.x + wo.y * wo.y);
     if !(rho > 0.0) {
@@ -36,6 +39,7 @@ pub fn from_direction(wo: Vec3) -> Option<[f32; 2]> {
 
 /// `ln(pdf_w / pdf_x) = -ln sin(theta_o)`.
 #[inline]
+#[must_use]
 pub fn ln_measure(theta: f32) -> f32 {
     -ln(sin(theta))
 }

@@ -12,6 +12,7 @@ use core::f32::consts::PI;
 
 /// The encoding of `wi` into `E = 3 + 6 * freqs` values (`E` fixes the frequency count).
 #[inline]
+#[must_use]
 pub fn encode_wi<const E: usize>(wi: [f32; 3]) -> [f32; E] {
     let mut enc = [0.0; E];
     let mut s = [sin(PI * wi[0]), sin(PI * wi[1]), sin(PI * wi[2])];
@@ -38,6 +39,7 @@ pub fn encode_wi<const E: usize>(wi: [f32; 3]) -> [f32; E] {
 /// The first `P` values of `enc` (the base net's encoding is a prefix of the velocity
 /// net's; the loader checks `P <= E`).
 #[inline]
+#[must_use]
 pub fn prefix<const P: usize, const E: usize>(enc: &[f32; E]) -> [f32; P] {
     let mut out = [0.0; P];
     for (o, e) in out.iter_mut().zip(enc.iter()) {
