@@ -105,7 +105,7 @@ impl<
         let x0 = c.base.sample(u);
         let (x, ln_det) = self.flow_with_ln_det(&c, x0, steps)?;
         let wo = self.def.domain.to_direction(x)?;
-        // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (DESIGN.md, "The math")
+        // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (docs/math.md, (38))
         let ln_pdf = c.base.ln_pdf(x0) - ln_det + self.def.domain.ln_measure(x, wo);
         let pdf = exp(ln_pdf);
         let wo = frame.to_world(wo);

@@ -16,7 +16,7 @@ use crate::spec::{
 pub fn quantile(u: f32) -> f32 {
     let q = if u < 0.5 { u } else { 1.0 - u };
     // `u` closer than GAUSSIAN_TAIL_MIN to 0 or 1 maps to |z| = 7.1: keeps `u = 0` finite;
-    // the mass beyond (1.8e-12 per tail) is never sampled. The approximation's tail
+    // the mass beyond (9.1e-13 per tail) is never sampled. The approximation's tail
     // probability is within 2e-5 (relative) of `u` down to tails of 2e-8, and within 10 %
     // below that (tests/base_distributions.rs).
     let q = q.clamp(GAUSSIAN_TAIL_MIN, 0.5);

@@ -1,7 +1,7 @@
 //! The flow: `N` explicit Euler steps `x_{k+1} = x_k + h v(x_k, t_k, wi)`, `h = 1/N`,
 //! `t_k = k h`, and its exact inverse.
 //!
-//! `pdf_x(x_N) = p0(x0) / prod_k det(I + h dv/dx(x_k))` (DESIGN.md, "The math") is exact
+//! `pdf_x(x_N) = p0(x0) / prod_k det(I + h dv/dx(x_k))` (docs/math.md, (1)) is exact
 //! for the discrete map that runs, for any `N`, as long as each step is invertible.
 
 mod forward;
