@@ -9,8 +9,7 @@
 
 use crate::Error;
 use diffbsdf::internals::blob::Blob;
-use diffbsdf::spec::BASE_OUTPUTS;
-use diffbsdf::ModelDef;
+use diffbsdf::{ModelDef, Net};
 
 /// A fully connected layer inside the parameter block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,10 +30,10 @@ pub struct ModelDesc {
     pub crc32: u32,
     /// Every parameter in blob order, decoded to f32.
     pub params: Vec<f32>,
-    /// Base net layers, the last one the readout (4 outputs).
+    /// Base net layers, the last one the readout (`BASE_OUTPUTS` outputs).
     pub base: Vec<Layer>,
     /// Velocity net layers, the first over `[features, t, encoding]`, the last the
-    /// readout (2 outputs).
+    /// readout (`VELOCITY_OUTPUTS` outputs).
     pub velocity: Vec<Layer>,
 }
 
@@ -48,21 +47,9 @@ impl ModelDesc {
         let crc = bytes.get(tail..).unwrap_or(&[0; 4]);
         let crc32 = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
         let mut at = 0;
-        let base = layers(
-            &mut at,
-            def.base.encoding_len(),
-            def.base.width as usize,
-            def.base.hidden_layers as usize,
-            BASE_OUTPUTS,
-        );
-        let velocity = layers(
-            &mut at,
-            def.velocity_inputs(),
-            def.velocity.width as usize,
-            def.velocity.hidden_layers as usize,
-            2,
-        );
-        if at != params.len() {
+        let base = layers(&def, Net::Base, &mut at);
+        let velocity = layers(&def, Net::Velocity, &mut at);
+        if at != def.param_count() || params.len() != def.param_count() {
             return Err(Error::Internal("layer offsets do not cover the parameters"));
         }
         Ok(ModelDesc {
@@ -85,27 +72,64 @@ impl ModelDesc {
     }
 }
 
-fn layers(
-    at: &mut usize,
-    inputs: usize,
-    width: usize,
-    hidden: usize,
-    outputs: usize,
-) -> Vec<Layer> {
-    let mut out = Vec::with_capacity(hidden + 1);
-    let mut fan_in = inputs;
-    for k in 0..=hidden {
-        let n = if k == hidden { outputs } else { width };
-        let w = *at;
-        let b = w + n * fan_in;
-        *at = b + n;
-        out.push(Layer {
-            w,
-            b,
-            inputs: fan_in,
-            outputs: n,
-        });
-        fan_in = n;
+/// The layers of `net` as `def` describes them, placed in the parameter block from `*at`
+/// on (`W` row by row, then `b`); `*at` ends past the last one.
+fn layers(def: &ModelDef, net: Net, at: &mut usize) -> Vec<Layer> {
+    (0..def.layer_count(net))
+        .filter_map(|index| def.layer(net, index))
+        .map(|l| {
+            let w = *at;
+            let b = w + l.outputs * l.inputs;
+            *at += l.param_count();
+            Layer {
+                w,
+                b,
+                inputs: l.inputs,
+                outputs: l.outputs,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use diffbsdf::internals::blob::{blob_len, write_blob};
+
+    /// A valid blob for `def` with small, deterministic weights.
+    pub(crate) fn blob(def: &ModelDef) -> Vec<u8> {
+        let params: Vec<f32> = (0..def.param_count())
+            .map(|i| 0.25 * (i as f32 * 0.618).sin())
+            .collect();
+        let mut out = vec![0; blob_len(def)];
+        write_blob(def, &params, &mut out).expect("write blob");
+        out
     }
-    out
+
+    /// Each layer sits right after the previous one and spans `ModelDef::layer`'s
+    /// parameter count, `W` first; the two nets together cover the whole blob.
+    #[test]
+    fn offsets_follow_the_kernel_layers() {
+        for mut def in [ModelDef::paper_disk(), ModelDef::paper_sphere()] {
+            for isotropic in [false, true] {
+                def.isotropic = isotropic;
+                let m = ModelDesc::from_blob(&blob(&def)).expect("desc");
+                let mut at = 0;
+                for (net, layers) in [(Net::Base, &m.base), (Net::Velocity, &m.velocity)] {
+                    assert_eq!(layers.len(), def.layer_count(net));
+                    for (index, l) in layers.iter().enumerate() {
+                        let k = def.layer(net, index).expect("layer");
+                        assert_eq!((l.inputs, l.outputs), (k.inputs, k.outputs));
+                        assert_eq!(l.w, at);
+                        assert_eq!(l.b, at + k.inputs * k.outputs);
+                        at += k.param_count();
+                    }
+                    assert_eq!(layers[0].inputs, def.net_inputs(net));
+                    assert_eq!(layers[layers.len() - 1].outputs, def.net_outputs(net));
+                }
+                assert_eq!(at, def.param_count());
+                assert_eq!(m.params.len(), def.param_count());
+            }
+        }
+    }
 }

@@ -1,8 +1,9 @@
 //! What a target language supplies to the shared emitter: type names, literals,
 //! declarations, loops, function headers, struct declarations and builtin names. Each
 //! language module (`glsl`, `wgsl`, `c`) implements this and writes its own public entry
-//! points; the algorithm itself is written once, in `emit.rs`, so the three outputs
-//! cannot drift apart.
+//! points; the algorithm itself is written once, in `emit/`, so the three outputs
+//! cannot drift apart. What differs between languages (types, literals, casts, builtins,
+//! half-precision support) is answered here, never by a test on the language in `emit/`.
 
 /// A type in generated code.
 #[derive(Clone, Debug, PartialEq)]
@@ -64,6 +65,22 @@ pub trait Dialect {
     fn clamp(&self, x: &str, lo: &str, hi: &str) -> String;
     /// Conversion to `t`.
     fn cast(&self, t: &T, e: &str) -> String;
+    /// `e` (an f32 expression) as the network type: a cast in f16 output, else `e`.
+    fn to_net(&self, e: &str) -> String {
+        if self.half() {
+            self.cast(&T::N, e)
+        } else {
+            e.to_string()
+        }
+    }
+    /// `e` (a network-type expression) as f32: a cast in f16 output, else `e`.
+    fn to_f32(&self, e: &str) -> String {
+        if self.half() {
+            self.cast(&T::F, e)
+        } else {
+            e.to_string()
+        }
+    }
     /// An expression that is true when the f32 `x` is neither infinite nor NaN, robust to
     /// compilers that assume no NaN in comparisons.
     fn finite(&self, x: &str) -> String;

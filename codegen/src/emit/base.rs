@@ -1,0 +1,155 @@
+//! Mirrors `src/base/`: the Gaussian quantile and log-density (`gaussian.rs`), the
+//! wrapped Cauchy sample and log-density (`wrapped_cauchy.rs`) and the base distribution
+//! `p0(x0 | wi)` of each domain (`mod.rs`).
+
+use super::Emitter;
+use crate::dialect::{Math, T};
+use diffbsdf::spec::{
+    ERFINV_BRANCH_W, ERFINV_CENTRAL, ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT,
+    GAUSSIAN_TAIL_MIN, LN_4PI, LN_INV_SQRT_2PI,
+};
+
+impl Emitter<'_> {
+    pub(super) fn poly(&mut self, coeffs: &[f32]) {
+        self.code.line(format!("p = {};", self.f(coeffs[0])));
+        for c in &coeffs[1..] {
+            self.code.line(format!("p = {} + p * w;", self.f(*c)));
+        }
+    }
+
+    pub(super) fn quantile(&mut self) {
+        self.code
+            .line("// The standard normal quantile Phi^-1(u) = sqrt(2) erfinv(2u - 1), by Giles'");
+        self.code
+            .line("// single-precision erfinv on the tail probability q = min(u, 1 - u).");
+        self.fn_open(T::F, "quantile", false, &[(T::F, "u")]);
+        self.decl(T::F, "q", "u");
+        let half = self.f(0.5);
+        let one = self.f(1.0);
+        self.code.open(format!("if (u >= {half}) {{"));
+        self.code.line(format!("q = {one} - u;"));
+        self.code.close("}");
+        let tail = self.f(GAUSSIAN_TAIL_MIN);
+        self.code
+            .line(format!("q = {};", self.d.clamp("q", &tail, &half)));
+        let two = self.f(2.0);
+        self.decl(T::F, "x", &format!("{one} - {two} * q"));
+        let ln = self.math(Math::Log, &format!("{} * q * ({one} - q)", self.f(4.0)));
+        self.decl(T::F, "w", &format!("-{ln}"));
+        self.decl(T::F, "p", &self.f(0.0));
+        self.code
+            .open(format!("if (w < {}) {{", self.f(ERFINV_BRANCH_W)));
+        self.code
+            .line(format!("w = w - {};", self.f(ERFINV_CENTRAL_SHIFT)));
+        self.poly(&ERFINV_CENTRAL);
+        self.code.reopen("} else {");
+        let sq = self.math(Math::Sqrt, "w");
+        self.code
+            .line(format!("w = {sq} - {};", self.f(ERFINV_TAIL_SHIFT)));
+        self.poly(&ERFINV_TAIL);
+        self.code.close("}");
+        let s2 = self.f(core::f32::consts::SQRT_2);
+        self.decl(T::F, "z", &format!("{s2} * p * x"));
+        self.code.open(format!("if (u < {half}) {{"));
+        self.code.line("return -z;");
+        self.code.close("}");
+        self.code.line("return z;");
+        self.end_fn();
+    }
+
+    pub(super) fn wc_sample(&mut self) {
+        self.code
+            .line("// Wrapped Cauchy offset for u: 2 atan2(-tanh(gamma/2) cos(pi u), sin(pi u)).");
+        self.fn_open(
+            T::F,
+            "wrapped_cauchy_sample",
+            false,
+            &[(T::F, "u"), (T::F, "gamma")],
+        );
+        self.decl(T::F, "a", &format!("{} * u", self.f(core::f32::consts::PI)));
+        let th = self.math(Math::Tanh, &format!("{} * gamma", self.f(0.5)));
+        let y = format!("-{th} * {}", self.math(Math::Cos, "a"));
+        let x = self.math(Math::Sin, "a");
+        self.code.line(format!(
+            "return {} * {};",
+            self.f(2.0),
+            self.d.atan2(&y, &x)
+        ));
+        self.end_fn();
+    }
+
+    pub(super) fn wc_ln_pdf(&mut self) {
+        self.code.line(
+            "// ln of the wrapped Cauchy density at offset d, in its cancellation-free form.",
+        );
+        self.fn_open(
+            T::F,
+            "wrapped_cauchy_ln_pdf",
+            false,
+            &[(T::F, "d"), (T::F, "gamma")],
+        );
+        let half = self.f(0.5);
+        let sh = self.math(Math::Sinh, &format!("{half} * gamma"));
+        self.decl(T::F, "sh", &sh);
+        let sd = self.math(Math::Sin, &format!("{half} * d"));
+        self.decl(T::F, "sd", &sd);
+        let a = self.math(Math::Log, &self.math(Math::Sinh, "gamma"));
+        let b = self.math(Math::Log, "sh * sh + sd * sd");
+        self.code
+            .line(format!("return {a} - {} - {b};", self.f(LN_4PI)));
+        self.end_fn();
+    }
+
+    pub(super) fn base_sample(&mut self) {
+        let cond_t = self.st("Cond");
+        let vec_t = self.st("Vec2");
+        self.code
+            .line("// x0 for u: the deterministic map of the base distribution.");
+        let ps = [(cond_t, "cond"), (T::F, "u0"), (T::F, "u1")];
+        self.fn_open(vec_t.clone(), "base_sample", false, &ps);
+        let r = self.d.decl(&vec_t, "r", None);
+        self.code.line(r);
+        let q0 = self.call("quantile", false, &["u0"]);
+        if self.sphere() {
+            let e1 = self.math(Math::Exp, "cond.p1");
+            self.code.line(format!("r.x = cond.p0 + {e1} * {q0};"));
+            let g = self.math(Math::Exp, "cond.p3");
+            let wc = self.call("wrapped_cauchy_sample", false, &["u1", &g]);
+            self.code.line(format!("r.y = cond.p2 + {wc};"));
+        } else {
+            let q1 = self.call("quantile", false, &["u1"]);
+            let e2 = self.math(Math::Exp, "cond.p2");
+            let e3 = self.math(Math::Exp, "cond.p3");
+            self.code.line(format!("r.x = cond.p0 + {e2} * {q0};"));
+            self.code.line(format!("r.y = cond.p1 + {e3} * {q1};"));
+        }
+        self.code.line("return r;");
+        self.end_fn();
+    }
+
+    pub(super) fn base_ln_pdf(&mut self) {
+        let cond_t = self.st("Cond");
+        self.code.line("// ln p0(x0) in flow coordinates.");
+        let ps = [(cond_t, "cond"), (T::F, "x0"), (T::F, "x1")];
+        self.fn_open(T::F, "base_ln_pdf", false, &ps);
+        let c = self.f(LN_INV_SQRT_2PI);
+        let mh = self.f(-0.5);
+        if self.sphere() {
+            let e = self.math(Math::Exp, "-cond.p1");
+            self.decl(T::F, "z", &format!("(x0 - cond.p0) * {e}"));
+            let g = self.math(Math::Exp, "cond.p3");
+            let wc = self.call("wrapped_cauchy_ln_pdf", false, &["x1 - cond.p2", &g]);
+            self.code
+                .line(format!("return {mh} * z * z + {c} - cond.p1 + {wc};"));
+        } else {
+            let e0 = self.math(Math::Exp, "-cond.p2");
+            let e1 = self.math(Math::Exp, "-cond.p3");
+            self.decl(T::F, "z0", &format!("(x0 - cond.p0) * {e0}"));
+            self.decl(T::F, "z1", &format!("(x1 - cond.p1) * {e1}"));
+            self.code.line(format!(
+                "return ({mh} * z0 * z0 + {c}) + ({mh} * z1 * z1 + {c}) - cond.p2 - cond.p3;"
+            ));
+        }
+        self.end_fn();
+    }
+}

@@ -1,0 +1,139 @@
+//! Mirrors `src/domain/`: `phi` wrapping (`sphere.rs`), the features the velocity net
+//! sees, how a step advances a flow point, the map to a direction and the measure change
+//! to solid angle (`mod.rs`, `disk.rs`, `sphere.rs`).
+
+use super::Emitter;
+use crate::dialect::{Math, T};
+
+impl Emitter<'_> {
+    pub(super) fn wrap(&mut self) {
+        let tau = core::f32::consts::TAU;
+        self.code.line("// phi wrapped into [-pi, pi).");
+        self.fn_open(T::F, "wrap", false, &[(T::F, "phi")]);
+        let fl = self.math(
+            Math::Floor,
+            &format!(
+                "(phi + {}) * {}",
+                self.f(core::f32::consts::PI),
+                self.f(1.0 / tau)
+            ),
+        );
+        self.code
+            .line(format!("return phi - {} * {fl};", self.f(tau)));
+        self.end_fn();
+    }
+
+    /// Features of the flow point `(a, b)` as network-type locals `f0..`.
+    pub(super) fn features(&mut self) {
+        let fa = self.d.to_net("a");
+        self.decl(T::N, "f0", &fa);
+        if self.sphere() {
+            let s = self.d.to_net(&self.math(Math::Sin, "b"));
+            let c = self.d.to_net(&self.math(Math::Cos, "b"));
+            self.decl(T::N, "f1", &s);
+            self.decl(T::N, "f2", &c);
+        } else {
+            let fb = self.d.to_net("b");
+            self.decl(T::N, "f1", &fb);
+        }
+        let tn = self.d.to_net("t");
+        self.decl(T::N, "tn", &tn);
+    }
+
+    /// The first layer's tangents `ta`, `tb` for output row `row`: its feature columns
+    /// times `d feat / da` = (1, 0[, 0]) and `d feat / db` = (0, 1) on the disk,
+    /// (0, cos b, -sin b) on the sphere (the kernel's `features_with_derivative`).
+    pub(super) fn feature_tangents(&mut self, row: &str) {
+        let wa = self.w(format!("{row} + 0u"));
+        self.decl(T::N, "ta", &wa);
+        let w1 = self.w(format!("{row} + 1u"));
+        if self.sphere() {
+            let w2 = self.w(format!("{row} + 2u"));
+            self.decl(T::N, "tb", &format!("{w1} * f2 + {w2} * (-f1)"));
+        } else {
+            self.decl(T::N, "tb", &w1);
+        }
+    }
+
+    /// `var = var + h * dv` with phi wrapped on the sphere.
+    pub(super) fn advance(&self, a: &str, da: &str, b: &str, db: &str) -> Vec<String> {
+        let mut v = vec![format!("{a} = {a} + {da};")];
+        if self.sphere() {
+            v.push(format!(
+                "{b} = {};",
+                self.call("wrap", false, &[&format!("{b} + {db}")])
+            ));
+        } else {
+            v.push(format!("{b} = {b} + {db};"));
+        }
+        v
+    }
+
+    pub(super) fn start_point(&mut self, a: &str, b: &str) {
+        self.decl(T::F, "a", a);
+        if self.sphere() {
+            let w = self.call("wrap", false, &[b]);
+            self.decl(T::F, "b", &w);
+        } else {
+            self.decl(T::F, "b", b);
+        }
+    }
+
+    pub(super) fn point_to_direction(&mut self) {
+        let rt = self.st("Result");
+        self.code.line(
+            "// The direction of flow point (a, b) with pdf = 1, or none() outside the domain.",
+        );
+        self.fn_open(
+            rt.clone(),
+            "to_direction",
+            false,
+            &[(T::F, "a"), (T::F, "b")],
+        );
+        let r = self.d.decl(&rt, "r", None);
+        self.code.line(r);
+        let zero = self.f(0.0);
+        let one = self.f(1.0);
+        let ret_none = format!("return {};", self.call("none", false, &[]));
+        if self.sphere() {
+            let pi = self.f(core::f32::consts::PI);
+            self.decl(T::F, "st", &self.math(Math::Sin, "a"));
+            self.code.open(format!(
+                "if (!(st > {zero} && a > {zero} && a < {pi} && {})) {{",
+                self.d.finite("b")
+            ));
+            self.code.line(&ret_none);
+            self.code.close("}");
+            self.code
+                .line(format!("r.x = st * {};", self.math(Math::Cos, "b")));
+            self.code
+                .line(format!("r.y = st * {};", self.math(Math::Sin, "b")));
+            self.code
+                .line(format!("r.z = {};", self.math(Math::Cos, "a")));
+        } else {
+            self.decl(T::F, "r2", "a * a + b * b");
+            self.code
+                .open(format!("if (!({} && r2 < {one})) {{", self.d.finite("r2")));
+            self.code.line(&ret_none);
+            self.code.close("}");
+            self.decl(T::F, "z", &self.math(Math::Sqrt, &format!("{one} - r2")));
+            self.code.open(format!("if (!(z > {zero})) {{"));
+            self.code.line(&ret_none);
+            self.code.close("}");
+            self.code.line("r.x = a;");
+            self.code.line("r.y = b;");
+            self.code.line("r.z = z;");
+        }
+        self.code.line(format!("r.pdf = {one};"));
+        self.code.line("return r;");
+        self.end_fn();
+    }
+
+    pub(super) fn ln_measure(&self, wo_z: &str, theta: &str) -> String {
+        if self.sphere() {
+            format!("-{}", self.math(Math::Log, &self.math(Math::Sin, theta)))
+        } else {
+            self.math(Math::Log, wo_z)
+        }
+    }
+}

@@ -1,0 +1,296 @@
+//! Mirrors `src/flow/inverse.rs`: the residual of one Euler step, Newton's method with its
+//! line search, the three starts of `invert_step`, and the PDF of a given direction.
+
+use super::Emitter;
+use crate::dialect::{Math, T};
+use diffbsdf::spec::{LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16};
+
+impl Emitter<'_> {
+    /// Newton's tolerance: the kernel's, or the f16 one.
+    fn newton_tol(&self) -> f32 {
+        if self.d.half() {
+            NEWTON_TOL_F16
+        } else {
+            NEWTON_TOL
+        }
+    }
+
+    fn step_params() -> [(T, &'static str); 4] {
+        [(T::F, "t"), (T::F, "h"), (T::F, "ya"), (T::F, "yb")]
+    }
+
+    /// The kernel's `residual`: `x + h v(x) - y` (phi difference wrapped), `dv/dx` and
+    /// `det(I + h dv/dx)` at `x = (a, b)`.
+    pub(super) fn residual(&mut self) {
+        self.code
+            .line("// x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).");
+        let cond = self.st("Cond");
+        let mut ps = vec![(cond, "cond")];
+        ps.extend(Self::step_params());
+        ps.extend([(T::F, "a"), (T::F, "b")]);
+        self.fn_open(self.st("Residual"), "residual", true, &ps);
+        let j = self.call("velocity_jacobian", true, &["cond", "t", "a", "b"]);
+        self.decl(self.st("Jac"), "j", &j);
+        let decl = self.d.decl(&self.st("Residual"), "r", None);
+        self.code.line(decl);
+        self.code.line("r.r0 = (a + h * j.v0) - ya;");
+        if self.sphere() {
+            let adv = self.call("wrap", false, &["b + h * j.v1"]);
+            let dif = self.call("wrap", false, &[&format!("{adv} - yb")]);
+            self.code.line(format!("r.r1 = {dif};"));
+        } else {
+            self.code.line("r.r1 = (b + h * j.v1) - yb;");
+        }
+        for c in ["j00", "j01", "j10", "j11"] {
+            self.code.line(format!("r.{c} = j.{c};"));
+        }
+        self.code.line(format!("r.det = {};", self.det_expr()));
+        self.code.line("return r;");
+        self.end_fn();
+    }
+
+    /// The kernel's `newton`: Newton steps where `I + h dv/dx` is orientation preserving,
+    /// fixed-point steps where it is not, each with a backtracking line search.
+    pub(super) fn newton(&mut self) {
+        self.code.line(
+            "// Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,",
+        );
+        self.code.line(format!(
+            "// fixed-point steps where not, each halved (at most {LINE_SEARCH_HALVINGS} times) until the residual shrinks."
+        ));
+        let cond = self.st("Cond");
+        let root = self.st("Root");
+        let mut ps = vec![(cond, "cond")];
+        ps.extend(Self::step_params());
+        ps.extend([(T::F, "xa"), (T::F, "xb")]);
+        self.fn_open(root.clone(), "newton", true, &ps);
+        let zero = self.f(0.0);
+        let one = self.f(1.0);
+        let tol = self.f(self.newton_tol());
+        let decl = self.d.decl(&root, "x", None);
+        self.code.line(decl);
+        self.code.line(format!("x.a = {zero};"));
+        self.code.line(format!("x.b = {zero};"));
+        self.code.line(format!("x.det = {zero};"));
+        self.decl(T::F, "a", "xa");
+        self.decl(T::F, "b", "xb");
+        let res = self.call("residual", true, &["cond", "t", "h", "ya", "yb", "a", "b"]);
+        self.decl(self.st("Residual"), "at", &res);
+        let abs = |s: &Self, x: &str| s.math(Math::Abs, x);
+        let mx = self.d.math(Math::Max);
+        self.for_open("it", &self.u(NEWTON_MAX_ITERS as usize));
+        self.decl(T::F, "d0", "at.r0");
+        self.decl(T::F, "d1", "at.r1");
+        self.code.open(format!("if (at.det > {zero}) {{"));
+        self.code.line("// d = (I + h J)^-1 r by the 2x2 adjugate.");
+        self.code.line(format!(
+            "d0 = (({one} + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;"
+        ));
+        self.code.line(format!(
+            "d1 = (({one} + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;"
+        ));
+        self.code.close("}");
+        let size = format!("{mx}({}, {})", abs(self, "d0"), abs(self, "d1"));
+        self.decl(T::F, "size", &size);
+        self.code
+            .open(format!("if (!{}) {{", self.d.finite("size")));
+        self.code.line("return x;");
+        self.code.close("}");
+        let scale = format!("{one} + {mx}({}, {})", abs(self, "a"), abs(self, "b"));
+        self.decl(T::F, "scale", &scale);
+        self.code.open(format!("if (size <= {tol} * scale) {{"));
+        self.code.line(
+            "// Converged: the update is below the f32 noise of x + h v(x); det is taken at the",
+        );
+        self.code
+            .line("// returned point, where the forward pass takes it.");
+        self.code.line("x.a = a - d0;");
+        if self.sphere() {
+            let w = self.call("wrap", false, &["b - d1"]);
+            self.code.line(format!("x.b = {w};"));
+        } else {
+            self.code.line("x.b = b - d1;");
+        }
+        let fin = self.call(
+            "residual",
+            true,
+            &["cond", "t", "h", "ya", "yb", "x.a", "x.b"],
+        );
+        self.decl(self.st("Residual"), "fin", &fin);
+        self.code.open(format!("if (fin.det > {zero}) {{"));
+        self.code.line("x.det = fin.det;");
+        self.code.close("}");
+        self.code.line("return x;");
+        self.code.close("}");
+        let norm = format!("{mx}({}, {})", abs(self, "at.r0"), abs(self, "at.r1"));
+        self.decl(T::F, "norm", &norm);
+        self.decl(T::F, "lambda", &one);
+        self.for_open("ls", &self.u(LINE_SEARCH_HALVINGS as usize));
+        self.decl(T::F, "ta", "a - lambda * d0");
+        if self.sphere() {
+            let w = self.call("wrap", false, &["b - lambda * d1"]);
+            self.decl(T::F, "tb", &w);
+        } else {
+            self.decl(T::F, "tb", "b - lambda * d1");
+        }
+        let res = self.call(
+            "residual",
+            true,
+            &["cond", "t", "h", "ya", "yb", "ta", "tb"],
+        );
+        self.code.line(format!("at = {res};"));
+        self.code.line("a = ta;");
+        self.code.line("b = tb;");
+        let next = format!("{mx}({}, {})", abs(self, "at.r0"), abs(self, "at.r1"));
+        self.code.open(format!("if ({next} < norm) {{"));
+        self.code.line("break;");
+        self.code.close("}");
+        self.code
+            .line(format!("lambda = lambda * {};", self.f(0.5)));
+        self.code.close("}");
+        self.code.open(format!(
+            "if (lambda * size <= {tol} * scale && at.det > {zero}) {{"
+        ));
+        self.code
+            .line("// The step just taken was below the noise: converged here.");
+        self.code.line("x.a = a;");
+        self.code.line("x.b = b;");
+        self.code.line("x.det = at.det;");
+        self.code.line("return x;");
+        self.code.close("}");
+        self.code.close("}");
+        self.code.line("return x;");
+        self.end_fn();
+    }
+
+    /// The kernel's `invert_step`: Newton from `y - h v(y)`, then (rarely needed) from one
+    /// fixed-point iterate further and from `y - h v(y) / 2`.
+    pub(super) fn invert_step(&mut self) {
+        self.code.line(
+            "// The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point",
+        );
+        self.code
+            .line("// iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).");
+        let cond = self.st("Cond");
+        let root = self.st("Root");
+        let mut ps = vec![(cond, "cond")];
+        ps.extend(Self::step_params());
+        self.fn_open(root.clone(), "invert_step", true, &ps);
+        let zero = self.f(0.0);
+        let v = self.call("velocity", true, &["cond", "t", "ya", "yb"]);
+        self.decl(self.st("Vec2"), "v", &v);
+        let start = |s: &Self, scale: &str, vv: &str| -> (String, String) {
+            let a = format!("ya - {scale}h * {vv}.x");
+            let b = if s.sphere() {
+                s.call("wrap", false, &[&format!("yb - {scale}h * {vv}.y")])
+            } else {
+                format!("yb - {scale}h * {vv}.y")
+            };
+            (a, b)
+        };
+        let (a0, b0) = start(self, "", "v");
+        self.decl(T::F, "a0", &a0);
+        self.decl(T::F, "b0", &b0);
+        let n0 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a0", "b0"]);
+        self.decl(root.clone(), "x", &n0);
+        self.code.open(format!("if (x.det > {zero}) {{"));
+        self.code.line("return x;");
+        self.code.close("}");
+        let v1 = self.call("velocity", true, &["cond", "t", "a0", "b0"]);
+        self.decl(self.st("Vec2"), "v1", &v1);
+        let (a1, b1) = start(self, "", "v1");
+        self.decl(T::F, "a1", &a1);
+        self.decl(T::F, "b1", &b1);
+        let n1 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a1", "b1"]);
+        self.code.line(format!("x = {n1};"));
+        self.code.open(format!("if (x.det > {zero}) {{"));
+        self.code.line("return x;");
+        self.code.close("}");
+        let half = format!("{} * ", self.f(0.5));
+        let (a2, b2) = start(self, &half, "v");
+        self.decl(T::F, "a2", &a2);
+        self.decl(T::F, "b2", &b2);
+        let n2 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a2", "b2"]);
+        self.code.line(format!("return {n2};"));
+        self.end_fn();
+    }
+
+    pub(super) fn pdf_impl(&mut self) {
+        let zero = self.f(0.0);
+        let fail = format!("return {zero};");
+        self.code.line(
+            "// The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's",
+        );
+        self.code
+            .line("// method on x + h v(x) = y, starting from y - h v(y).");
+        let ps = [
+            (T::F, "wx"),
+            (T::F, "wy"),
+            (T::F, "wz"),
+            (T::F, "ox"),
+            (T::F, "oy"),
+            (T::F, "oz"),
+            (T::U, "steps"),
+        ];
+        self.fn_open(T::F, "pdf_impl", true, &ps);
+        let ut = self.st("Unit");
+        let wo = self.call("unit", false, &["ox", "oy", "oz"]);
+        self.decl(ut, "wo", &wo);
+        self.code.open("if (!wo.ok) {");
+        self.code.line(&fail);
+        self.code.close("}");
+        self.prologue(false, &fail);
+        let (ox, oy) = if self.m.def.isotropic {
+            self.decl(T::F, "lox", "fr.c * wo.x + fr.s * wo.y");
+            self.decl(T::F, "loy", "fr.c * wo.y - fr.s * wo.x");
+            ("lox", "loy")
+        } else {
+            ("wo.x", "wo.y")
+        };
+        if self.sphere() {
+            let rho = self.math(Math::Sqrt, &format!("{ox} * {ox} + {oy} * {oy}"));
+            self.decl(T::F, "rho", &rho);
+            self.code.open(format!("if (!(rho > {zero})) {{"));
+            self.code.line(&fail);
+            self.code.close("}");
+            self.decl(T::F, "ya", &self.d.atan2("rho", "wo.z"));
+            self.decl(T::F, "yb", &self.d.atan2(oy, ox));
+        } else {
+            self.code.open(format!("if (!(wo.z > {zero})) {{"));
+            self.code.line(&fail);
+            self.code.close("}");
+            self.decl(T::F, "ya", ox);
+            self.decl(T::F, "yb", oy);
+        }
+        self.start_point("ya", "yb");
+        self.decl(T::F, "ln_det", &zero);
+        self.for_open("kk", "n");
+        self.decl(T::U, "k", "n - 1u - kk");
+        let t = format!("{} * h", self.d.cast(&T::F, "k"));
+        self.decl(T::F, "t", &t);
+        let root = self.call("invert_step", true, &["cond", "t", "h", "a", "b"]);
+        self.decl(self.st("Root"), "x", &root);
+        self.code.open(format!("if (!(x.det > {zero})) {{"));
+        self.code.line(&fail);
+        self.code.close("}");
+        self.code.line("a = x.a;");
+        self.code.line("b = x.b;");
+        self.code.line(format!(
+            "ln_det = ln_det + {};",
+            self.math(Math::Log, "x.det")
+        ));
+        self.code.close("}");
+        let lp = self.call("base_ln_pdf", false, &["cond", "a", "b"]);
+        let lm = self.ln_measure("wo.z", "ya");
+        self.decl(
+            T::F,
+            "pdf",
+            &self.math(Math::Exp, &format!("{lp} - ln_det + {lm}")),
+        );
+        self.code.open(format!("if (!{}) {{", self.d.finite("pdf")));
+        self.code.line(&fail);
+        self.code.close("}");
+        self.code.line("return pdf;");
+        self.end_fn();
+    }
+}

@@ -1,0 +1,220 @@
+//! The generated code against the kernel's definition: every `diffbsdf::spec` constant the
+//! emitter prints is parsed back from the text of each language and precision and compared
+//! with the kernel's value, so a constant restated (or mistyped) in `emit/` fails here.
+
+use crate::desc::tests::blob;
+use crate::{generate, Float, Language, Options};
+use diffbsdf::spec::{
+    BASE_OUTPUTS, ENCODING_PER_FREQ, ENCODING_RAW, ERFINV_BRANCH_W, ERFINV_CENTRAL,
+    ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT, EXP_ARG_LIMIT_F16, EXP_ARG_MAX,
+    EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI, LN_SCALE_MAX,
+    LN_SCALE_MIN, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO,
+    UNIT_TOLERANCE, VELOCITY_OUTPUTS,
+};
+use diffbsdf::{Domain, ModelDef};
+
+/// One generated output: what it is, and its text.
+struct Output {
+    label: String,
+    def: ModelDef,
+    half: bool,
+    code: String,
+}
+
+/// Every language and precision, for an isotropic disk model and a sphere model.
+fn outputs() -> Vec<Output> {
+    let mut disk = ModelDef::paper_disk();
+    disk.isotropic = true;
+    let mut sphere = ModelDef::paper_sphere();
+    sphere.isotropic = false;
+    let mut out = Vec::new();
+    for def in [disk, sphere] {
+        let bytes = blob(&def);
+        for language in [Language::Glsl, Language::Wgsl, Language::C] {
+            for float in [Float::F32, Float::F16] {
+                if language == Language::C && float == Float::F16 {
+                    continue;
+                }
+                let mut options = Options::new(language);
+                options.float = float;
+                let code = generate(&bytes, &options).expect("generate");
+                out.push(Output {
+                    label: format!("{:?} {language:?} {float:?}", def.domain),
+                    def,
+                    half: float == Float::F16,
+                    code,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The trimmed lines of generated function `name` (its header at column 0, up to the
+/// closing `}` at column 0).
+fn body<'a>(o: &'a Output, name: &str) -> Vec<&'a str> {
+    let call = format!("_{name}(");
+    let mut lines = o.code.lines();
+    lines
+        .by_ref()
+        .find(|l| !l.starts_with(' ') && l.contains(&call) && l.ends_with('{'))
+        .unwrap_or_else(|| panic!("{}: no function {name}", o.label));
+    lines.take_while(|l| *l != "}").map(str::trim).collect()
+}
+
+/// The float literals of a line, in order (`1.0`, `-87.0f`, `2e-3`, `11.0hf`, `0.5h`).
+fn lits(line: &str) -> Vec<f32> {
+    line.split(|c: char| !(c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '+')))
+        .filter(|t| {
+            let digits = t.strip_prefix('-').unwrap_or(t);
+            digits.starts_with(|c: char| c.is_ascii_digit()) && (t.contains('.') || t.contains('e'))
+        })
+        .map(|t| {
+            let t = t.trim_end_matches("hf").trim_end_matches(['h', 'f']);
+            t.parse::<f32>()
+                .unwrap_or_else(|_| panic!("not a float literal: {t} in {line}"))
+        })
+        .collect()
+}
+
+/// The unsigned integer literals of a line (`32u`).
+fn uints(line: &str) -> Vec<u32> {
+    line.split(|c: char| !c.is_ascii_alphanumeric())
+        .filter_map(|t| t.strip_suffix('u')?.parse().ok())
+        .collect()
+}
+
+/// The one line of `lines` that starts with `start`.
+fn line<'a>(o: &Output, lines: &[&'a str], start: &str) -> &'a str {
+    let found: Vec<&str> = lines
+        .iter()
+        .copied()
+        .filter(|l| l.starts_with(start))
+        .collect();
+    assert_eq!(found.len(), 1, "{}: lines starting with {start:?}", o.label);
+    found[0]
+}
+
+#[test]
+fn activation_clamps_are_the_kernels() {
+    for o in outputs() {
+        let (lo, hi) = if o.half {
+            (-EXP_ARG_LIMIT_F16, EXP_ARG_LIMIT_F16)
+        } else {
+            (EXP_ARG_MIN, EXP_ARG_MAX)
+        };
+        let b = body(&o, "sigmoid");
+        let ret = line(&o, &b, "return");
+        assert_eq!(lits(ret), [1.0, 1.0, lo, hi], "{}", o.label);
+    }
+}
+
+#[test]
+fn encoding_layout_is_the_kernels() {
+    for o in outputs() {
+        let b = body(&o, "encode");
+        let at: Vec<&str> = b.iter().copied().filter(|l| l.ends_with("* k;")).collect();
+        assert_eq!(at.len(), 1, "{}", o.label);
+        let want = [ENCODING_RAW as u32, ENCODING_PER_FREQ as u32];
+        assert_eq!(uints(at[0]), want, "{}", o.label);
+    }
+}
+
+#[test]
+fn gaussian_quantile_is_the_kernels() {
+    let want: Vec<f32> = ERFINV_CENTRAL.iter().chain(&ERFINV_TAIL).copied().collect();
+    for o in outputs() {
+        let b = body(&o, "quantile");
+        let coeffs: Vec<f32> = b
+            .iter()
+            .filter(|l| l.starts_with("p = "))
+            .map(|l| lits(l)[0])
+            .collect();
+        assert_eq!(coeffs, want, "{}: erfinv coefficients", o.label);
+        let branch = line(&o, &b, "if (w <");
+        assert_eq!(lits(branch), [ERFINV_BRANCH_W], "{}", o.label);
+        let central = line(&o, &b, "w = w -");
+        assert_eq!(lits(central), [ERFINV_CENTRAL_SHIFT], "{}", o.label);
+        let tail = b
+            .iter()
+            .find(|l| l.starts_with("w = ") && l.contains("sqrt"));
+        let tail = tail.unwrap_or_else(|| panic!("{}: no tail shift", o.label));
+        assert_eq!(lits(tail), [ERFINV_TAIL_SHIFT], "{}", o.label);
+        let clamped = b.iter().rfind(|l| l.starts_with("q = "));
+        let clamped = clamped.unwrap_or_else(|| panic!("{}: no clamp of q", o.label));
+        assert_eq!(lits(clamped), [GAUSSIAN_TAIL_MIN, 0.5], "{}", o.label);
+    }
+}
+
+#[test]
+fn densities_and_scales_use_the_kernels_constants() {
+    for o in outputs() {
+        let b = body(&o, "base_ln_pdf");
+        let ret = line(&o, &b, "return");
+        assert!(lits(ret).contains(&LN_INV_SQRT_2PI), "{}", o.label);
+        if o.def.domain == Domain::Sphere {
+            let b = body(&o, "wrapped_cauchy_ln_pdf");
+            let ret = line(&o, &b, "return");
+            assert!(lits(ret).contains(&LN_4PI), "{}", o.label);
+        }
+        let b = body(&o, "condition");
+        let clamps: Vec<Vec<f32>> = b
+            .iter()
+            .filter(|l| l.starts_with("r.p") && l.contains("outv"))
+            .map(|l| lits(l))
+            .collect();
+        assert_eq!(clamps.len(), BASE_OUTPUTS, "{}", o.label);
+        let scales: Vec<&Vec<f32>> = clamps.iter().filter(|c| !c.is_empty()).collect();
+        assert_eq!(scales.len(), 2, "{}: two log-scales", o.label);
+        for c in scales {
+            assert_eq!(*c, [LN_SCALE_MIN, LN_SCALE_MAX], "{}", o.label);
+        }
+        let readout = format!("-> {BASE_OUTPUTS}:");
+        assert!(b.iter().any(|l| l.contains(&readout)), "{}", o.label);
+        let readout = format!("-> {VELOCITY_OUTPUTS}:");
+        let v = body(&o, "velocity");
+        assert!(v.iter().any(|l| l.contains(&readout)), "{}", o.label);
+    }
+}
+
+#[test]
+fn input_checks_are_the_kernels() {
+    for o in outputs() {
+        let b = body(&o, "unit");
+        let ok = line(&o, &b, "r.ok =");
+        // `| |w|^2 - 1 | <= UNIT_TOLERANCE`, after the finiteness test (C compares with
+        // FLT_MAX).
+        assert!(
+            lits(ok).ends_with(&[1.0, UNIT_TOLERANCE]),
+            "{}: {ok}",
+            o.label
+        );
+        if o.def.isotropic {
+            let b = body(&o, "frame");
+            let normal = line(&o, &b, "if (rho >");
+            assert_eq!(lits(normal), [NORMAL_INCIDENCE_RHO], "{}", o.label);
+        }
+    }
+}
+
+#[test]
+fn newton_constants_are_the_kernels() {
+    for o in outputs() {
+        let tol = if o.half { NEWTON_TOL_F16 } else { NEWTON_TOL };
+        let b = body(&o, "newton");
+        let iters = b
+            .iter()
+            .find(|l| l.starts_with("for (") && l.contains("it <"));
+        let iters = iters.unwrap_or_else(|| panic!("{}: no Newton loop", o.label));
+        assert_eq!(uints(iters), [0, NEWTON_MAX_ITERS], "{}", o.label);
+        let halvings = b
+            .iter()
+            .find(|l| l.starts_with("for (") && l.contains("ls <"));
+        let halvings = halvings.unwrap_or_else(|| panic!("{}: no line search", o.label));
+        assert_eq!(uints(halvings), [0, LINE_SEARCH_HALVINGS], "{}", o.label);
+        let converged = line(&o, &b, "if (size <=");
+        assert_eq!(lits(converged), [tol], "{}", o.label);
+        let stalled = line(&o, &b, "if (lambda * size <=");
+        assert_eq!(lits(stalled), [tol, 0.0], "{}", o.label);
+    }
+}
