@@ -6,7 +6,7 @@
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::blob::{blob_len, write_blob};
 use diffbsdf::internals::Diagnostics;
-use diffbsdf::{Domain, Model3x32, Model4x32, ModelDef, ModelName, Precision};
+use diffbsdf::{AnyModel, Domain, ModelDef, ModelName, Net, Precision};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -52,80 +52,53 @@ impl Rng {
 pub fn random_params(def: &ModelDef, seed: u64, stretch: f32) -> Vec<f32> {
     let mut rng = Rng::new(seed);
     let mut p = Vec::with_capacity(def.param_count());
-    let layer = |p: &mut Vec<f32>,
-                 rng: &mut Rng,
-                 rows: usize,
-                 cols: usize,
-                 scale: f32,
-                 damp_from: usize| {
-        for _ in 0..rows {
-            for c in 0..cols {
-                let damp = if c >= damp_from { 0.3 } else { 1.0 };
-                p.push(damp * rng.range(-scale, scale));
+    for net in Net::ALL {
+        for i in 0..def.layer_count(net) {
+            let Some(layer) = def.layer(net, i) else {
+                continue;
+            };
+            let readout = !layer.activated;
+            let fan = (layer.inputs as f32).sqrt();
+            let scale = match (net, readout) {
+                (_, false) => 1.7 / fan,
+                (Net::Base, true) => 0.17 / fan,
+                (Net::Velocity, true) => stretch / fan,
+            };
+            // The `wi` columns of the first velocity layer follow the features and `t`.
+            let damp_from = if net == Net::Velocity && i == 0 {
+                def.domain.feature_count() + 1
+            } else {
+                usize::MAX
+            };
+            for _ in 0..layer.outputs {
+                for c in 0..layer.inputs {
+                    let damp = if c >= damp_from { 0.3 } else { 1.0 };
+                    p.push(damp * rng.range(-scale, scale));
+                }
+            }
+            for r in 0..layer.outputs {
+                p.push(match (net, readout) {
+                    (Net::Base, false) => rng.range(-0.1, 0.1),
+                    (Net::Base, true) => base_bias(def.domain, r, &mut rng),
+                    (Net::Velocity, false) => rng.range(-0.2, 0.2),
+                    (Net::Velocity, true) => rng.range(-0.1, 0.1),
+                });
             }
         }
-    };
-    let (bw, be) = (def.base.width as usize, def.base.encoding_len());
-    let mut fan = be;
-    for _ in 0..def.base.hidden_layers {
-        layer(
-            &mut p,
-            &mut rng,
-            bw,
-            fan,
-            1.7 / (fan as f32).sqrt(),
-            usize::MAX,
-        );
-        (0..bw).for_each(|_| p.push(rng.range(-0.1, 0.1)));
-        fan = bw;
     }
-    layer(
-        &mut p,
-        &mut rng,
-        4,
-        bw,
-        0.17 / (bw as f32).sqrt(),
-        usize::MAX,
-    );
-    for r in 0..4 {
-        let ln_scale = rng.range(0.08f32.ln(), 0.4f32.ln());
-        p.push(match (def.domain, r) {
-            (Domain::Disk, 0 | 1) => rng.range(-0.4, 0.4),
-            (Domain::Sphere, 0) => rng.range(0.3, 2.8),
-            (Domain::Sphere, 2) => rng.range(-3.0, 3.0),
-            _ => ln_scale,
-        });
-    }
-    let vw = def.velocity.width as usize;
-    let mut fan = def.velocity_inputs();
-    for k in 0..def.velocity.hidden_layers {
-        let damp_from = if k == 0 {
-            def.domain.feature_count() + 1
-        } else {
-            usize::MAX
-        };
-        layer(
-            &mut p,
-            &mut rng,
-            vw,
-            fan,
-            1.7 / (fan as f32).sqrt(),
-            damp_from,
-        );
-        (0..vw).for_each(|_| p.push(rng.range(-0.2, 0.2)));
-        fan = vw;
-    }
-    layer(
-        &mut p,
-        &mut rng,
-        2,
-        vw,
-        stretch / (vw as f32).sqrt(),
-        usize::MAX,
-    );
-    (0..2).for_each(|_| p.push(rng.range(-0.1, 0.1)));
     assert_eq!(p.len(), def.param_count());
     p
+}
+
+/// A base readout bias: locations inside the domain, log-scales in [ln 0.08, ln 0.4].
+fn base_bias(domain: Domain, r: usize, rng: &mut Rng) -> f32 {
+    let ln_scale = rng.range(0.08f32.ln(), 0.4f32.ln());
+    match (domain, r) {
+        (Domain::Disk, 0 | 1) => rng.range(-0.4, 0.4),
+        (Domain::Sphere, 0) => rng.range(0.3, 2.8),
+        (Domain::Sphere, 2) => rng.range(-3.0, 3.0),
+        _ => ln_scale,
+    }
 }
 
 /// A blob of `def` with random parameters.
@@ -212,29 +185,17 @@ pub fn shipped_models() -> Vec<TestModel> {
 }
 
 /// The kernel's answers for one model (whichever compiled shape it has).
-pub enum Kernel {
-    Three(Box<Model3x32>),
-    Four(Box<Model4x32>),
-}
+pub struct Kernel(Box<AnyModel>);
 
 impl Kernel {
     pub fn load(blob: &[u8]) -> Kernel {
-        match Model3x32::from_blob(blob) {
-            Ok(m) => Kernel::Three(Box::new(m)),
-            Err(_) => Kernel::Four(Box::new(Model4x32::from_blob(blob).expect("blob loads"))),
-        }
+        Kernel(Box::new(AnyModel::from_blob(blob).expect("blob loads")))
     }
     pub fn domain(&self) -> Domain {
-        match self {
-            Kernel::Three(m) => m.def().domain,
-            Kernel::Four(m) => m.def().domain,
-        }
+        self.0.def().domain
     }
     pub fn default_steps(&self) -> u32 {
-        match self {
-            Kernel::Three(m) => m.default_steps(),
-            Kernel::Four(m) => m.default_steps(),
-        }
+        self.0.def().default_steps as u32
     }
     /// `steps = 0` means the default, as in the C API and the generated code.
     fn steps(&self, steps: u32) -> u32 {
@@ -246,19 +207,15 @@ impl Kernel {
     }
     pub fn direction(&self, wi: [f32; 3], u: [f32; 2], steps: u32) -> Option<[f32; 3]> {
         let (wi, u, s) = (Vec3::from(wi), Vec2::from(u), self.steps(steps));
-        match self {
-            Kernel::Three(m) => m.sample_direction_steps(wi, u, s),
-            Kernel::Four(m) => m.sample_direction_steps(wi, u, s),
-        }
-        .map(|v| v.to_array())
+        self.0
+            .sample_direction_steps(wi, u, s)
+            .map(|v| v.to_array())
     }
     pub fn sample(&self, wi: [f32; 3], u: [f32; 2], steps: u32) -> Option<([f32; 3], f32)> {
         let (wi, u, s) = (Vec3::from(wi), Vec2::from(u), self.steps(steps));
-        match self {
-            Kernel::Three(m) => m.sample_steps(wi, u, s),
-            Kernel::Four(m) => m.sample_steps(wi, u, s),
-        }
-        .map(|s| (s.wo.to_array(), s.pdf))
+        self.0
+            .sample_steps(wi, u, s)
+            .map(|s| (s.wo.to_array(), s.pdf))
     }
     /// How much the sampling map `x0 -> wo` amplifies a perturbation of the flow's start
     /// point near `u` (finite differences along both `u` axes, 1e-3 and 1e-4 apart): rounding
@@ -267,10 +224,7 @@ impl Kernel {
     /// multiplied by about this much. 1 or less for gentle flows; large for the sharp lobes
     /// of trained models.
     pub fn amplification(&self, wi: [f32; 3], u: [f32; 2], steps: u32) -> f32 {
-        let base = match self {
-            Kernel::Three(m) => m.base_distribution(Vec3::from(wi)),
-            Kernel::Four(m) => m.base_distribution(Vec3::from(wi)),
-        };
+        let base = self.0.base_distribution(Vec3::from(wi));
         let (Some(base), Some(wo)) = (base, self.direction(wi, u, steps)) else {
             return 1.0;
         };
@@ -315,10 +269,7 @@ impl Kernel {
 
     pub fn pdf(&self, wi: [f32; 3], wo: [f32; 3], steps: u32) -> f32 {
         let (wi, wo, s) = (Vec3::from(wi), Vec3::from(wo), self.steps(steps));
-        match self {
-            Kernel::Three(m) => m.pdf_steps(wi, wo, s),
-            Kernel::Four(m) => m.pdf_steps(wi, wo, s),
-        }
+        self.0.pdf_steps(wi, wo, s)
     }
 }
 
