@@ -1,0 +1,446 @@
+//! `diffbsdf fit <material-spec> --domain disk|sphere --steps N --seed S --out m.dbsdf`:
+//! trains a sampler for a material and writes its blob (f32 at `--out`, f16 beside it as
+//! `<stem>.f16.dbsdf`), then measures its quality unless `--no-eval`.
+
+use super::choose::{fewest_steps, Candidate, Criteria};
+use clap::{Args, ValueEnum};
+use diffbsdf::{Domain, Precision};
+use diffbsdf_materials::{parse_spec, SpecError};
+use diffbsdf_train::metrics::{evaluate, table, EvalConfig, Report};
+use diffbsdf_train::{fit_material, FitConfig, ModelExt, Progress, StageReport, TrainError};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Flow domain on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum DomainArg {
+    /// Projected unit disk (BRDFs).
+    Disk,
+    /// (theta, phi) over the sphere (full BSDFs, grazing specular BRDFs).
+    Sphere,
+    /// The disk where it suffices; the sphere for transmissive materials, or when the
+    /// disk model misses `--max-grazing-firefly` or `--target-rv`.
+    Auto,
+}
+
+impl DomainArg {
+    /// The domains to try, cheapest first.
+    pub fn candidates(self, material: &dyn diffbsdf_materials::Material) -> Vec<Domain> {
+        match self {
+            DomainArg::Disk => vec![Domain::Disk],
+            DomainArg::Sphere => vec![Domain::Sphere],
+            DomainArg::Auto if material.is_transmissive() => vec![Domain::Sphere],
+            DomainArg::Auto => vec![Domain::Disk, Domain::Sphere],
+        }
+    }
+}
+
+/// Arguments of `diffbsdf fit`.
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Material spec, e.g. `conductor:ggx,alpha=0.3,metal=Cu`.
+    pub spec: String,
+    /// Flow domain.
+    #[arg(long, value_enum, default_value = "disk")]
+    pub domain: DomainArg,
+    /// Mean RV to reach: the blob's default steps become the fewest of 1, 2, 4, ..., 32
+    /// that reach it (with every step invertible); with `--domain auto` a disk model that
+    /// cannot reach it gives way to a sphere model.
+    #[arg(long)]
+    pub target_rv: Option<f64>,
+    /// With `--domain auto`: the largest firefly ratio (99.99th percentile of w / E[w])
+    /// allowed at grazing wi (theta_i >= 85 deg) before the sphere is used instead.
+    #[arg(long, default_value_t = 20.0)]
+    pub max_grazing_firefly: f64,
+    /// Samples per wi of the `--domain auto` / `--target-rv` checks.
+    #[arg(long, default_value_t = 1 << 14)]
+    pub check_samples: usize,
+    /// Euler steps of the student (default 4 on the disk, 8 on the sphere).
+    #[arg(long)]
+    pub steps: Option<u16>,
+    /// Seed of every random draw: the same command and seed give the same blob.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Euler steps stored in the blob as its default, when they should differ from the
+    /// steps the student was trained at (`--steps`): more steps keep every step
+    /// invertible where a sharp lobe needs it; the PDF stays exact either way.
+    #[arg(long)]
+    pub export_steps: Option<u16>,
+    /// Output blob (f32); the f16 blob is written beside it.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Name stored in the blob (at most 32 bytes; default: the file stem).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// A fit of a few seconds (tests, smoke runs) instead of the standard one.
+    #[arg(long)]
+    pub tiny: bool,
+    /// Training pairs.
+    #[arg(long)]
+    pub pairs: Option<usize>,
+    /// Base-net iterations.
+    #[arg(long)]
+    pub base_iters: Option<usize>,
+    /// Teacher iterations.
+    #[arg(long)]
+    pub teacher_iters: Option<usize>,
+    /// Teacher hidden width.
+    #[arg(long)]
+    pub teacher_width: Option<usize>,
+    /// Teacher hidden layers.
+    #[arg(long)]
+    pub teacher_layers: Option<usize>,
+    /// Reflow pairs.
+    #[arg(long)]
+    pub reflow_pairs: Option<usize>,
+    /// RK4 steps of the teacher per reflow pair.
+    #[arg(long)]
+    pub reflow_steps: Option<usize>,
+    /// Student iterations.
+    #[arg(long)]
+    pub student_iters: Option<usize>,
+    /// Peak learning rate of the teacher.
+    #[arg(long)]
+    pub teacher_lr: Option<f32>,
+    /// Peak learning rate of the student.
+    #[arg(long)]
+    pub student_lr: Option<f32>,
+    /// Extra training pairs with wi within 30 degrees of the horizon, as a fraction of
+    /// --pairs.
+    #[arg(long)]
+    pub grazing: Option<f64>,
+    /// Train the student only at its Euler times k/N.
+    #[arg(long)]
+    pub euler_times: bool,
+    /// Condition on the full wi even when the material is isotropic (by default an
+    /// isotropic material is fitted in the incident frame: wi turned to phi = 0).
+    #[arg(long)]
+    pub ignore_isotropy: bool,
+    /// Isotropic fits: fraction of the training wi drawn with theta_i uniform in angle
+    /// (the rest uniform in solid angle, which favours grazing). Default 0.5.
+    #[arg(long)]
+    pub angle_fraction: Option<f64>,
+    /// Batch size of the teacher and the student.
+    #[arg(long)]
+    pub batch: Option<usize>,
+    /// Skip the quality evaluation.
+    #[arg(long)]
+    pub no_eval: bool,
+    /// Samples per wi in the evaluation.
+    #[arg(long, default_value_t = 1 << 16)]
+    pub eval_samples: usize,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Why `fit`, `eval` or `demo` failed.
+#[derive(Debug)]
+pub enum CommandError {
+    /// The material spec did not parse.
+    Spec(SpecError),
+    /// Training or export failed.
+    Train(TrainError),
+    /// Reading or writing a file failed.
+    Io(PathBuf, std::io::Error),
+    /// Writing the output failed.
+    Output(std::io::Error),
+    /// JSON encoding failed.
+    Json(String),
+    /// Generating shader or header code failed.
+    Codegen(String),
+    /// The models folder could not be read.
+    Catalog(crate::tradeoff::CatalogError),
+    /// The tradeoff sweep, its plot or its images failed.
+    Sweep(crate::tradeoff::SweepError),
+}
+
+impl fmt::Display for CommandError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CommandError::Spec(e) => write!(f, "{e}"),
+            CommandError::Train(e) => write!(f, "{e}"),
+            CommandError::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            CommandError::Output(e) => write!(f, "write failed: {e}"),
+            CommandError::Json(e) => write!(f, "JSON encoding failed: {e}"),
+            CommandError::Codegen(e) => write!(f, "{e}"),
+            CommandError::Catalog(e) => write!(f, "{e}"),
+            CommandError::Sweep(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for CommandError {}
+
+impl From<diffbsdf::BlobError> for CommandError {
+    fn from(e: diffbsdf::BlobError) -> Self {
+        CommandError::Train(TrainError::Blob(e))
+    }
+}
+
+impl From<TrainError> for CommandError {
+    fn from(e: TrainError) -> Self {
+        CommandError::Train(e)
+    }
+}
+
+/// Progress bars on stderr, one per training stage.
+#[derive(Debug, Default)]
+pub struct Bars {
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl Progress for Bars {
+    fn stage(&self, name: &'static str, total: u64) {
+        let bar = ProgressBar::new(total);
+        if let Ok(style) =
+            ProgressStyle::with_template("{prefix:>8} [{bar:32}] {pos}/{len} {msg} ({elapsed})")
+        {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar.set_prefix(name);
+        if let Ok(mut slot) = self.bar.lock() {
+            if let Some(old) = slot.replace(bar) {
+                old.finish();
+            }
+        }
+    }
+
+    fn advance(&self, n: u64, loss: Option<f64>) {
+        if let Ok(slot) = self.bar.lock() {
+            if let Some(bar) = slot.as_ref() {
+                bar.inc(n);
+                if let Some(l) = loss {
+                    if bar.position() % 25 == 0 {
+                        bar.set_message(format!("loss {l:.4}"));
+                    }
+                }
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Ok(mut slot) = self.bar.lock() {
+            if let Some(old) = slot.take() {
+                old.finish();
+            }
+        }
+    }
+}
+
+/// What `fit --json` prints.
+#[derive(Debug, Serialize)]
+pub struct FitOutput {
+    /// Material spec.
+    pub material: String,
+    /// Seed.
+    pub seed: u64,
+    /// Output blob paths (f32, f16).
+    pub blobs: [String; 2],
+    /// Blob sizes in bytes (f32, f16).
+    pub bytes: [usize; 2],
+    /// Training wall time in seconds.
+    pub train_seconds: f64,
+    /// Training pairs.
+    pub pairs: usize,
+    /// Per-stage losses and times.
+    pub stages: Vec<StageReport>,
+    /// Quality report.
+    pub report: Option<Report>,
+    /// The `--domain auto` / `--target-rv` checks, in order, if any were made.
+    pub choice: Vec<Candidate>,
+}
+
+/// The f16 blob's path beside `out`.
+pub fn f16_path(out: &Path) -> PathBuf {
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("model");
+    out.with_file_name(format!("{stem}.f16.dbsdf"))
+}
+
+/// Writes `bytes` to `path`.
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), CommandError> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| CommandError::Io(dir.to_path_buf(), e))?;
+    }
+    std::fs::write(path, bytes).map_err(|e| CommandError::Io(path.to_path_buf(), e))
+}
+
+/// Prints `value` as pretty JSON.
+pub fn print_json<T: Serialize>(
+    value: &T,
+    out: &mut dyn std::io::Write,
+) -> Result<(), CommandError> {
+    let s = serde_json::to_string_pretty(value).map_err(|e| CommandError::Json(e.to_string()))?;
+    writeln!(out, "{s}").map_err(CommandError::Output)
+}
+
+/// The fit configuration the arguments ask for, on `domain`.
+pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
+    let mut c = if args.tiny {
+        FitConfig::tiny(domain, args.seed)
+    } else {
+        FitConfig::standard(domain, args.seed)
+    };
+    let set = |dst: &mut usize, v: Option<usize>| {
+        if let Some(v) = v {
+            *dst = v.max(1);
+        }
+    };
+    if let Some(s) = args.steps {
+        c.def.default_steps = s.max(1);
+    }
+    set(&mut c.pairs, args.pairs);
+    set(&mut c.base.iters, args.base_iters);
+    set(&mut c.teacher.iters, args.teacher_iters);
+    if let Some(w) = args.teacher_width {
+        c.teacher_net.width = w.clamp(1, u16::MAX as usize) as u16;
+    }
+    if let Some(l) = args.teacher_layers {
+        c.teacher_net.hidden_layers = l.clamp(1, u8::MAX as usize) as u8;
+    }
+    set(&mut c.reflow_pairs, args.reflow_pairs);
+    set(&mut c.reflow_steps, args.reflow_steps);
+    set(&mut c.student.iters, args.student_iters);
+    set(&mut c.teacher.batch, args.batch);
+    c.student_euler_times |= args.euler_times;
+    if args.ignore_isotropy {
+        c.use_isotropy = false;
+    }
+    if let Some(a) = args.angle_fraction {
+        c.angle_fraction = a.clamp(0.0, 1.0);
+    }
+    if let Some(g) = args.grazing {
+        c.grazing = g;
+    }
+    if let Some(lr) = args.teacher_lr {
+        c.teacher.lr = lr;
+    }
+    if let Some(lr) = args.student_lr {
+        c.student.lr = lr;
+    }
+    set(&mut c.student.batch, args.batch);
+    c
+}
+
+/// Trains on each candidate domain in turn (cheapest first) until one is sufficient;
+/// returns the fit kept and the checks made (none without `--domain auto` or
+/// `--target-rv`).
+fn fit_choosing(
+    args: &FitArgs,
+    material: &dyn diffbsdf_materials::Material,
+    name: &str,
+) -> Result<(diffbsdf_train::Fitted, Vec<Candidate>), CommandError> {
+    let choosing = args.domain == DomainArg::Auto || args.target_rv.is_some();
+    let criteria = Criteria {
+        target_rv: args.target_rv,
+        max_grazing_firefly: if args.domain == DomainArg::Auto {
+            args.max_grazing_firefly
+        } else {
+            f64::INFINITY
+        },
+        samples: args.check_samples,
+    };
+    let mut domains = args.domain.candidates(material).into_iter();
+    let mut domain = domains.next().unwrap_or(Domain::Sphere);
+    let mut checks = Vec::new();
+    loop {
+        let bars = Bars::default();
+        let mut fitted = fit_material(material, name, &config(args, domain), &bars)?;
+        if !choosing {
+            return Ok((fitted, checks));
+        }
+        let (pick, tried) = fewest_steps(&fitted.model, material, &criteria);
+        checks.extend(tried);
+        match (pick, domains.next()) {
+            (Some(p), _) => {
+                fitted.model = fitted.model.with_steps(p.steps);
+                return Ok((fitted, checks));
+            }
+            (None, Some(next)) => domain = next,
+            // Nothing sufficed: the most capable domain at its trained steps.
+            (None, None) => return Ok((fitted, checks)),
+        }
+    }
+}
+
+/// Runs `diffbsdf fit`.
+pub fn run(args: FitArgs, out: &mut dyn std::io::Write) -> Result<(), CommandError> {
+    let material = parse_spec(&args.spec).map_err(CommandError::Spec)?;
+    let name = args.name.clone().unwrap_or_else(|| {
+        let stem = args
+            .out
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("model");
+        stem.chars().take(32).collect()
+    });
+    let (mut fitted, choice) = fit_choosing(&args, material.as_ref(), &name)?;
+    if let Some(n) = args.export_steps {
+        fitted.model = fitted.model.with_steps(n.max(1));
+    }
+    let f32_blob = fitted.model.blob(Precision::F32)?;
+    let f16_blob = fitted.model.blob(Precision::F16)?;
+    let f16_out = f16_path(&args.out);
+    write_file(&args.out, &f32_blob)?;
+    write_file(&f16_out, &f16_blob)?;
+    let report = (!args.no_eval).then(|| {
+        let eval = EvalConfig {
+            samples: args.eval_samples,
+            ..EvalConfig::default()
+        };
+        evaluate(&fitted.model, material.as_ref(), &eval)
+    });
+    if args.json {
+        return print_json(
+            &FitOutput {
+                material: material.spec(),
+                seed: args.seed,
+                blobs: [
+                    args.out.display().to_string(),
+                    f16_out.display().to_string(),
+                ],
+                bytes: [f32_blob.len(), f16_blob.len()],
+                train_seconds: fitted.seconds,
+                pairs: fitted.pairs,
+                stages: fitted.stages,
+                report,
+                choice,
+            },
+            out,
+        );
+    }
+    let mut text = format!(
+        "trained {} in {:.1} s on {} pairs -> {} ({} B), {} ({} B)\n",
+        material.spec(),
+        fitted.seconds,
+        fitted.pairs,
+        args.out.display(),
+        f32_blob.len(),
+        f16_out.display(),
+        f16_blob.len()
+    );
+    for s in &fitted.stages {
+        text += &format!(
+            "  {:<8} {:>7.1} s  loss {:.5} -> {:.5}\n",
+            s.stage, s.seconds, s.loss_start, s.loss_end
+        );
+    }
+    for c in &choice {
+        text += &format!(
+            "  checked {:<6} N={:<2}: mean RV {:.4}, grazing firefly {:.1}, det<=0 {:.4} % -> {}\n",
+            c.domain,
+            c.steps,
+            c.rv_mean,
+            c.grazing_firefly,
+            100.0 * c.non_positive_det,
+            if c.sufficient { "sufficient" } else { "short" }
+        );
+    }
+    if let Some(r) = &report {
+        text += &table::render(r);
+    }
+    write!(out, "{text}").map_err(CommandError::Output)
+}

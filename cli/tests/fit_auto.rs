@@ -1,0 +1,114 @@
+//! `fit --domain auto` and `--target-rv`: the disk where it suffices, the sphere for
+//! transmissive materials or where the disk falls short, and the fewest sufficient steps.
+//! Tiny fits (seconds); the decisions are read back from `fit --json`.
+
+use clap::Parser;
+use diffbsdf::AnyModel;
+use diffbsdf_cli::cli::{run, Cli};
+use serde_json::Value;
+
+fn fit(spec: &str, extra: &[&str], out: &std::path::Path) -> Value {
+    let out_s = out.to_str().unwrap();
+    let mut args = vec![
+        "diffbsdf",
+        "fit",
+        spec,
+        "--tiny",
+        "--no-eval",
+        "--json",
+        "--check-samples",
+        "2048",
+        "--out",
+        out_s,
+    ];
+    args.extend_from_slice(extra);
+    let cli = Cli::try_parse_from(args).unwrap();
+    let mut buf = Vec::new();
+    run(cli, &mut buf).unwrap();
+    serde_json::from_slice(&buf).unwrap()
+}
+
+fn checks(v: &Value) -> Vec<(String, u64, bool)> {
+    v["choice"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            (
+                c["domain"].as_str().unwrap().to_owned(),
+                c["steps"].as_u64().unwrap(),
+                c["sufficient"].as_bool().unwrap(),
+            )
+        })
+        .collect()
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("diffbsdf-fit-auto-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn blob_steps_and_domain(path: &std::path::Path) -> (u16, diffbsdf::Domain) {
+    let m = AnyModel::from_blob(&std::fs::read(path).unwrap()).unwrap();
+    (m.def().default_steps, m.def().domain)
+}
+
+#[test]
+fn auto_uses_the_disk_with_the_fewest_steps_when_it_suffices() {
+    let out = scratch("easy.dbsdf");
+    let v = fit(
+        "conductor:ggx,alpha=0.3,metal=Cu",
+        &[
+            "--domain",
+            "auto",
+            "--target-rv",
+            "1e6",
+            "--max-grazing-firefly",
+            "1e9",
+        ],
+        &out,
+    );
+    // Any model reaches a target this loose: the cheapest one, disk at N = 1, is kept.
+    assert_eq!(checks(&v), vec![("disk".into(), 1, true)]);
+    assert_eq!(blob_steps_and_domain(&out), (1, diffbsdf::Domain::Disk));
+}
+
+#[test]
+fn auto_gives_way_to_the_sphere_when_the_disk_falls_short() {
+    let out = scratch("hard.dbsdf");
+    let v = fit(
+        "conductor:ggx,alpha=0.3,metal=Cu",
+        &["--domain", "auto", "--target-rv", "1e-9"],
+        &out,
+    );
+    let c = checks(&v);
+    // Every step count of the disk, then of the sphere, all short of an unreachable target.
+    assert_eq!(c.len(), 12, "{c:?}");
+    assert!(c[..6].iter().all(|(d, _, ok)| d == "disk" && !ok), "{c:?}");
+    assert!(
+        c[6..].iter().all(|(d, _, ok)| d == "sphere" && !ok),
+        "{c:?}"
+    );
+    let steps: Vec<u64> = c[..6].iter().map(|x| x.1).collect();
+    assert_eq!(steps, vec![1, 2, 4, 8, 16, 32]);
+    // Nothing sufficed: the sphere model at its trained steps is kept.
+    let (n, domain) = blob_steps_and_domain(&out);
+    assert_eq!(domain, diffbsdf::Domain::Sphere);
+    assert_eq!(n, 8, "the sphere's trained step count");
+}
+
+#[test]
+fn auto_goes_straight_to_the_sphere_for_transmissive_materials() {
+    let out = scratch("glass.dbsdf");
+    let v = fit(
+        "dielectric:beckmann,alpha=0.3,eta=1.5",
+        &["--domain", "auto", "--max-grazing-firefly", "1e9"],
+        &out,
+    );
+    let c = checks(&v);
+    // No RV target: only the trained step count of the sphere is checked; no disk fit.
+    assert_eq!(c.len(), 1, "{c:?}");
+    assert_eq!((c[0].0.as_str(), c[0].1), ("sphere", 8));
+    assert_eq!(blob_steps_and_domain(&out).1, diffbsdf::Domain::Sphere);
+}

@@ -1,0 +1,179 @@
+//! RGL measured files: all six real files load; truncated and corrupted copies are
+//! rejected with an error (never a panic); the tabular sampler passes the chi-square test
+//! against its own PDF and its PDF integrates to the sampled-mass fraction.
+
+mod common;
+
+use common::{chi2, dir_deg, rng, Domain, ALPHA};
+use diffbsdf_materials::rgl::{RglError, RglMaterial};
+use diffbsdf_materials::{DVec3, Material};
+use rand::Rng;
+
+/// The measured files: `shared/data/rgl/` beside the repository.
+fn data_dir() -> String {
+    let beside = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data/rgl");
+    assert!(
+        std::path::Path::new(beside).is_dir(),
+        "RGL test data missing: expected {beside} (the shared/ folder beside the repository)"
+    );
+    beside.to_string()
+}
+const FILES: [&str; 6] = [
+    "aurora_white_rgb.bsdf",
+    "cc_nothern_aurora_rgb.bsdf",
+    "chm_orange_rgb.bsdf",
+    "ilm_solo_m_68_rgb.bsdf",
+    "irid_flake_paint1_rgb.bsdf",
+    "vch_golden_yellow_rgb.bsdf",
+];
+
+fn path(f: &str) -> String {
+    format!("{}/{f}", data_dir())
+}
+
+#[test]
+fn reads_all_six_files() {
+    for f in FILES {
+        let m = RglMaterial::open(&path(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        assert!(!m.description.is_empty(), "{f}");
+        let wi = dir_deg(30.0, 0.0);
+        let v = m.eval(wi, dir_deg(30.0, std::f64::consts::PI));
+        assert!(v.is_finite() && v.max_channel() > 0.0, "{f}: {v:?}");
+    }
+}
+
+#[test]
+fn rejects_truncated_and_corrupted_copies() {
+    let bytes = std::fs::read(path(FILES[0])).unwrap();
+    for cut in [
+        0,
+        5,
+        12,
+        17,
+        30,
+        100,
+        415,
+        600,
+        3000,
+        bytes.len() / 2,
+        bytes.len() - 1,
+    ] {
+        assert!(
+            RglMaterial::from_bytes(&bytes[..cut]).is_err(),
+            "cut at {cut}"
+        );
+    }
+    let corrupt = |at: usize, v: u8| {
+        let mut b = bytes.clone();
+        b[at] = v;
+        RglMaterial::from_bytes(&b)
+    };
+    assert_eq!(corrupt(0, b'x').unwrap_err(), RglError::BadMagic);
+    assert!(matches!(
+        corrupt(12, 2).unwrap_err(),
+        RglError::UnsupportedVersion { .. }
+    ));
+    // Field count far larger than the header: runs off the end.
+    assert_eq!(corrupt(17, 0x7f).unwrap_err(), RglError::Truncated);
+    // First field: u16 name length at 18, name "version" (7 bytes), u16 ndim at 27, dtype at 29.
+    assert_eq!(corrupt(29, 0).unwrap_err(), RglError::BadDtype(0));
+    assert_eq!(corrupt(29, 99).unwrap_err(), RglError::BadDtype(99));
+    // Its offset's top byte (offset at 30..38): far past the end.
+    assert!(matches!(
+        corrupt(37, 0x40).unwrap_err(),
+        RglError::Truncated | RglError::Overflow
+    ));
+    // NaN inside the theta_i table (f32 at offset 488 in this file).
+    let mut b = bytes.clone();
+    b[488..492].copy_from_slice(&f32::NAN.to_le_bytes());
+    assert_eq!(
+        RglMaterial::from_bytes(&b).unwrap_err(),
+        RglError::NonFinite("theta_i")
+    );
+    // A sampled table with no mass.
+    let mut b = bytes.clone();
+    for x in b[526_856..526_856 + 4 * 1024].iter_mut() {
+        *x = 0;
+    }
+    assert_eq!(
+        RglMaterial::from_bytes(&b).unwrap_err(),
+        RglError::NotNormalizable("luminance")
+    );
+    // Random byte flips anywhere never panic.
+    let mut r = rng(3);
+    for _ in 0..300 {
+        let mut b = bytes.clone();
+        let i = r.gen_range(0..600);
+        b[i] = r.gen();
+        let _ = RglMaterial::from_bytes(&b);
+    }
+    assert!(matches!(
+        RglMaterial::open("/nonexistent.bsdf"),
+        Err(RglError::Io(_))
+    ));
+}
+
+#[test]
+fn sampler_chi2_and_normalisation() {
+    const N: usize = 100_000;
+    let angles = [10.0, 50.0, 80.0];
+    let tests = FILES.len() * angles.len();
+    let threshold = ALPHA / tests as f64;
+    let mut failures = Vec::new();
+    for (k, f) in FILES.iter().enumerate() {
+        let m = RglMaterial::open(&path(f)).unwrap();
+        for (j, deg) in angles.iter().enumerate() {
+            let wi = dir_deg(*deg, 0.4);
+            let mut r = rng(50 + 10 * k as u64 + j as u64);
+            let mut samples = Vec::new();
+            for _ in 0..N {
+                let u = [r.gen::<f64>(), r.gen::<f64>(), r.gen::<f64>()];
+                if let Some(s) = m.sample(wi, u) {
+                    let p = m.pdf(wi, s.wo);
+                    assert!((p - s.pdf).abs() <= 1e-6 * s.pdf, "{f}");
+                    assert!(s.weight.is_finite());
+                    samples.push(s.wo);
+                }
+            }
+            let frac = samples.len() as f64 / N as f64;
+            let dom = Domain::new(DVec3::new(-wi.x, -wi.y, wi.z));
+            let pdf = |w: DVec3| m.pdf(wi, w);
+            let integral = dom.integrate(&pdf);
+            let total: f64 = integral.iter().sum();
+            let mut observed = vec![0.0; integral.len() + 1];
+            for w in &samples {
+                observed[dom.bin(*w)] += 1.0;
+            }
+            observed[integral.len()] = (N - samples.len()) as f64;
+            let mut expected: Vec<f64> = integral.iter().map(|p| p * N as f64).collect();
+            expected.push((1.0 - total).max(0.0) * N as f64);
+            let c = chi2(&observed, &expected);
+            let sigma = (frac * (1.0 - frac) / N as f64).sqrt();
+            println!(
+                "{f:<28} theta_i={deg:4.1} int={total:.5} frac={frac:.5} chi2={:8.1} dof={:4} p={:.4}",
+                c.stat, c.dof, c.p
+            );
+            if c.p < threshold || (total - frac).abs() > 5.0 * sigma + 2e-3 {
+                failures.push(format!("{f} {deg}: p={:.3e} int={total} frac={frac}", c.p));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Energy: `int f |cos| dwo <= 1` by quadrature for every file.
+#[test]
+fn white_furnace_bound() {
+    for f in FILES {
+        let m = RglMaterial::open(&path(f)).unwrap();
+        for deg in [0.0, 45.0, 80.0] {
+            let wi = dir_deg(deg, 0.0);
+            let e: f64 = Domain::new(DVec3::new(-wi.x, -wi.y, wi.z))
+                .integrate(&|wo: DVec3| m.eval_cos(wi, wo).max_channel())
+                .iter()
+                .sum();
+            println!("{f:<28} theta_i={deg:4.1} albedo(max channel)={e:.4}");
+            assert!(e <= 1.0 + 2e-3, "{f} {deg}: {e}");
+        }
+    }
+}
