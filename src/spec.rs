@@ -30,6 +30,14 @@ pub const ENCODING_RAW: usize = 3;
 /// axis: `6 = 2 * 3` values per frequency).
 pub const ENCODING_PER_FREQ: usize = 6;
 
+/// Largest hidden width a blob may declare (keeps every size computation far from
+/// overflow).
+pub const MAX_WIDTH: u16 = 1024;
+/// Largest number of hidden layers a blob may declare.
+pub const MAX_LAYERS: u8 = 16;
+/// Largest number of encoding frequencies a blob may declare.
+pub const MAX_FREQS: u8 = 16;
+
 // ---------------------------------------------------------------------------------------
 // Activation: SiLU with the kernel's polynomial exp
 // ---------------------------------------------------------------------------------------

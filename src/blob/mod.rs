@@ -188,11 +188,7 @@ impl RawHeader {
 /// Header flag (bytes 28..32, u32): the model is isotropic.
 pub(crate) const FLAG_ISOTROPIC: u32 = 1;
 
-/// Largest width and layer count and frequency count a blob may declare (keeps every size
-/// computation far from overflow).
-const MAX_WIDTH: u16 = 1024;
-const MAX_LAYERS: u8 = 16;
-const MAX_FREQS: u8 = 16;
+use crate::spec::{MAX_FREQS, MAX_LAYERS, MAX_WIDTH};
 
 fn read_shape(cur: &mut Cursor<'_>) -> Option<NetShape> {
     let freqs = cur.u8()?;

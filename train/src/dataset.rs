@@ -2,7 +2,8 @@
 //! the encodings of `wi` computed once.
 
 use crate::data::{exact_pairs, exact_pairs_uniform_angle, Band, ExactConfig, Pair};
-use crate::features::{push_encoding, MAX_FREQS};
+use crate::features::push_encoding;
+use diffbsdf::spec::MAX_FREQS;
 use diffbsdf::{encoding_len, Domain};
 use diffbsdf_materials::{DVec3, Material, Spherical};
 

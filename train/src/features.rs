@@ -3,10 +3,8 @@
 //! and point arithmetic of [`Domain`] (phi wrapped, geodesic phi differences).
 
 use diffbsdf::internals::net::encoding::encode_wi;
+use diffbsdf::spec::MAX_FREQS;
 use diffbsdf::{encoding_len, Domain, ModelDef};
-
-/// Most encoding frequencies the trainer evaluates (the blob format's limit).
-pub const MAX_FREQS: u8 = 16;
 
 /// Length of the encoding at [`MAX_FREQS`]; every shorter encoding is a prefix of it.
 const MAX_ENCODING: usize = encoding_len(MAX_FREQS);
