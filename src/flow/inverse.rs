@@ -111,18 +111,22 @@ impl<
                 let det = self.residual(step, x, y, h).2;
                 return (det > 0.0).then_some((x, det));
             }
+            // Backtracking line search on the residual: from the same `x`, try the full
+            // step, then half of it, ... (at most LINE_SEARCH_HALVINGS halvings) and take
+            // the first that shrinks the residual, or the shortest tried if none does.
             let norm = r[0].abs().max(r[1].abs());
             let mut lambda = 1.0;
-            for _ in 0..LINE_SEARCH_HALVINGS {
+            let mut halvings = 0;
+            let (trial, next) = loop {
                 let trial = domain.advance(x, [-lambda * d[0], -lambda * d[1]]);
                 let next = self.residual(step, trial, y, h);
-                x = trial;
-                at = next;
-                if next.0[0].abs().max(next.0[1].abs()) < norm {
-                    break;
+                if next.0[0].abs().max(next.0[1].abs()) < norm || halvings == LINE_SEARCH_HALVINGS {
+                    break (trial, next);
                 }
                 lambda *= 0.5;
-            }
+                halvings += 1;
+            };
+            (x, at) = (trial, next);
             if lambda * size <= NEWTON_TOL * scale && at.2 > 0.0 {
                 // The step just taken was below the f32 noise of `x + h v(x)`: converged,
                 // with the determinant evaluated at the returned point.

@@ -55,8 +55,11 @@ impl Emitter<'_> {
         self.code.line(
             "// Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,",
         );
+        self.code.line(
+            "// fixed-point steps where not; each step backtracks from the same point (full,",
+        );
         self.code.line(format!(
-            "// fixed-point steps where not, each halved (at most {LINE_SEARCH_HALVINGS} times) until the residual shrinks."
+            "// half, ..., at most {LINE_SEARCH_HALVINGS} halvings) to the first that shrinks the residual."
         ));
         let cond = self.st("Cond");
         let root = self.st("Root");
@@ -125,13 +128,15 @@ impl Emitter<'_> {
         let norm = format!("{mx}({}, {})", abs(self, "at.r0"), abs(self, "at.r1"));
         self.decl(T::F, "norm", &norm);
         self.decl(T::F, "lambda", &one);
-        self.for_open("ls", &self.u(LINE_SEARCH_HALVINGS as usize));
-        self.decl(T::F, "ta", "a - lambda * d0");
+        self.decl(T::F, "ta", "a");
+        self.decl(T::F, "tb", "b");
+        self.for_open("ls", &self.u(LINE_SEARCH_HALVINGS as usize + 1));
+        self.code.line("ta = a - lambda * d0;");
         if self.sphere() {
             let w = self.call("wrap", false, &["b - lambda * d1"]);
-            self.decl(T::F, "tb", &w);
+            self.code.line(format!("tb = {w};"));
         } else {
-            self.decl(T::F, "tb", "b - lambda * d1");
+            self.code.line("tb = b - lambda * d1;");
         }
         let res = self.call(
             "residual",
@@ -139,15 +144,17 @@ impl Emitter<'_> {
             &["cond", "t", "h", "ya", "yb", "ta", "tb"],
         );
         self.code.line(format!("at = {res};"));
-        self.code.line("a = ta;");
-        self.code.line("b = tb;");
         let next = format!("{mx}({}, {})", abs(self, "at.r0"), abs(self, "at.r1"));
-        self.code.open(format!("if ({next} < norm) {{"));
+        let last = self.u(LINE_SEARCH_HALVINGS as usize);
+        self.code
+            .open(format!("if ({next} < norm || ls == {last}) {{"));
         self.code.line("break;");
         self.code.close("}");
         self.code
             .line(format!("lambda = lambda * {};", self.f(0.5)));
         self.code.close("}");
+        self.code.line("a = ta;");
+        self.code.line("b = tb;");
         self.code.open(format!(
             "if (lambda * size <= {tol} * scale && at.det > {zero}) {{"
         ));

@@ -211,7 +211,16 @@ fn newton_constants_are_the_kernels() {
             .iter()
             .find(|l| l.starts_with("for (") && l.contains("ls <"));
         let halvings = halvings.unwrap_or_else(|| panic!("{}: no line search", o.label));
-        assert_eq!(uints(halvings), [0, LINE_SEARCH_HALVINGS], "{}", o.label);
+        // The full step and LINE_SEARCH_HALVINGS halvings of it; the last one is taken.
+        assert_eq!(
+            uints(halvings),
+            [0, LINE_SEARCH_HALVINGS + 1],
+            "{}",
+            o.label
+        );
+        let last = b.iter().find(|l| l.contains("< norm || ls =="));
+        let last = last.unwrap_or_else(|| panic!("{}: no last-halving test", o.label));
+        assert_eq!(uints(last), [LINE_SEARCH_HALVINGS], "{}", o.label);
         let converged = line(&o, &b, "if (size <=");
         assert_eq!(lits(converged), [tol], "{}", o.label);
         let stalled = line(&o, &b, "if (lambda * size <=");

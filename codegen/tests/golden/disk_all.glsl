@@ -473,7 +473,8 @@ diffbsdf_tiny_disk_Residual diffbsdf_tiny_disk_residual(diffbsdf_tiny_disk_Cond 
 }
 
 // Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,
-// fixed-point steps where not, each halved (at most 8 times) until the residual shrinks.
+// fixed-point steps where not; each step backtracks from the same point (full,
+// half, ..., at most 8 halvings) to the first that shrinks the residual.
 diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_disk_Cond cond, float t, float h, float ya, float yb, float xa, float xb) {
     diffbsdf_tiny_disk_Root x;
     x.a = 0.0;
@@ -508,17 +509,19 @@ diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_disk_Cond cond, 
         }
         float norm = max(abs(at.r0), abs(at.r1));
         float lambda = 1.0;
-        for (uint ls = 0u; ls < 8u; ls++) {
-            float ta = a - lambda * d0;
-            float tb = b - lambda * d1;
+        float ta = a;
+        float tb = b;
+        for (uint ls = 0u; ls < 9u; ls++) {
+            ta = a - lambda * d0;
+            tb = b - lambda * d1;
             at = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, ta, tb);
-            a = ta;
-            b = tb;
-            if (max(abs(at.r0), abs(at.r1)) < norm) {
+            if (max(abs(at.r0), abs(at.r1)) < norm || ls == 8u) {
                 break;
             }
             lambda = lambda * 0.5;
         }
+        a = ta;
+        b = tb;
         if (lambda * size <= 1e-6 * scale && at.det > 0.0) {
             // The step just taken was below the noise: converged here.
             x.a = a;

@@ -449,7 +449,8 @@ fn diffbsdf_tiny_disk_residual(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32,
 }
 
 // Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,
-// fixed-point steps where not, each halved (at most 8 times) until the residual shrinks.
+// fixed-point steps where not; each step backtracks from the same point (full,
+// half, ..., at most 8 halvings) to the first that shrinks the residual.
 fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32, xa: f32, xb: f32) -> diffbsdf_tiny_disk_Root {
     var x: diffbsdf_tiny_disk_Root;
     x.a = 0.0f;
@@ -484,17 +485,19 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
         }
         var norm: f32 = max(abs(at.r0), abs(at.r1));
         var lambda: f32 = 1.0f;
-        for (var ls = 0u; ls < 8u; ls++) {
-            var ta: f32 = a - lambda * d0;
-            var tb: f32 = b - lambda * d1;
+        var ta: f32 = a;
+        var tb: f32 = b;
+        for (var ls = 0u; ls < 9u; ls++) {
+            ta = a - lambda * d0;
+            tb = b - lambda * d1;
             at = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, ta, tb);
-            a = ta;
-            b = tb;
-            if (max(abs(at.r0), abs(at.r1)) < norm) {
+            if (max(abs(at.r0), abs(at.r1)) < norm || ls == 8u) {
                 break;
             }
             lambda = lambda * 0.5f;
         }
+        a = ta;
+        b = tb;
         if (lambda * size <= 1e-6f * scale && at.det > 0.0f) {
             // The step just taken was below the noise: converged here.
             x.a = a;

@@ -312,7 +312,8 @@ static inline diffbsdf_tiny_sphere_Residual diffbsdf_tiny_sphere_residual(const 
 }
 
 /* Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0, */
-/* fixed-point steps where not, each halved (at most 8 times) until the residual shrinks. */
+/* fixed-point steps where not; each step backtracks from the same point (full, */
+/* half, ..., at most 8 halvings) to the first that shrinks the residual. */
 static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float *params, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float xa, float xb) {
     diffbsdf_tiny_sphere_Root x;
     x.a = 0.0f;
@@ -347,17 +348,19 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float 
         }
         float norm = fmaxf(fabsf(at.r0), fabsf(at.r1));
         float lambda = 1.0f;
-        for (unsigned ls = 0u; ls < 8u; ls++) {
-            float ta = a - lambda * d0;
-            float tb = diffbsdf_tiny_sphere_wrap(b - lambda * d1);
+        float ta = a;
+        float tb = b;
+        for (unsigned ls = 0u; ls < 9u; ls++) {
+            ta = a - lambda * d0;
+            tb = diffbsdf_tiny_sphere_wrap(b - lambda * d1);
             at = diffbsdf_tiny_sphere_residual(params, cond, t, h, ya, yb, ta, tb);
-            a = ta;
-            b = tb;
-            if (fmaxf(fabsf(at.r0), fabsf(at.r1)) < norm) {
+            if (fmaxf(fabsf(at.r0), fabsf(at.r1)) < norm || ls == 8u) {
                 break;
             }
             lambda = lambda * 0.5f;
         }
+        a = ta;
+        b = tb;
         if (lambda * size <= 1e-6f * scale && at.det > 0.0f) {
             /* The step just taken was below the noise: converged here. */
             x.a = a;
