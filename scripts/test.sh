@@ -30,3 +30,19 @@ echo "== no_std kernel on bare metal"; cargo build -p diffbsdf --target thumbv7e
 echo "== kernel and C ABI on Rust $msrv"; CARGO_TARGET_DIR=target/msrv cargo +"$msrv" build -p diffbsdf -p diffbsdf-ffi
 echo "== docs";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p diffbsdf -p diffbsdf-ffi -p diffbsdf-codegen
 echo "== tests";   cargo test --release --workspace
+
+echo "== python package (numpy API, Mitsuba 3 plugin)"
+# A venv under target/ (gitignored); pip and maturin skip what is already there.
+# Mitsuba's LLVM variants load libLLVM at run time: Debian's libllvm19.
+llvm_so=/usr/lib/x86_64-linux-gnu/libLLVM-19.so
+[ -e "$llvm_so" ] || [ -e "$llvm_so.1" ] || {
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libllvm19
+}
+[ -e "$llvm_so" ] || llvm_so="$llvm_so.1"
+pyvenv=target/pyvenv
+[ -x "$pyvenv/bin/python" ] || python3 -m venv "$pyvenv"
+"$pyvenv/bin/python" -m pip install -q --disable-pip-version-check \
+  "maturin>=1.5,<2" "numpy>=1.24" "mitsuba==3.9.1" "pytest>=7"
+VIRTUAL_ENV="$PWD/$pyvenv" "$pyvenv/bin/maturin" develop --release -q -m python/Cargo.toml
+DRJIT_LIBLLVM_PATH="$llvm_so" "$pyvenv/bin/python" -m pytest -q python/tests
