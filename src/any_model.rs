@@ -64,6 +64,18 @@ impl AnyModel {
         with_model!(self, m => m.def())
     }
 
+    /// The model's default number of Euler steps.
+    #[must_use]
+    pub fn default_steps(&self) -> u32 {
+        with_model!(self, m => m.default_steps())
+    }
+
+    /// See [`crate::Model::resolve_steps`].
+    #[must_use]
+    pub fn resolve_steps(&self, steps: u32) -> Option<u32> {
+        with_model!(self, m => m.resolve_steps(steps))
+    }
+
     /// Changes the stored name and default step count (metadata only).
     pub fn set_metadata(&mut self, name: ModelName, default_steps: u16) {
         with_model!(self, m => m.set_metadata(name, default_steps))

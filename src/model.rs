@@ -148,7 +148,7 @@ impl<
     /// Changes the stored name and default step count (metadata only).
     pub fn set_metadata(&mut self, name: crate::def::ModelName, default_steps: u16) {
         self.def.name = name;
-        self.def.default_steps = default_steps.max(1);
+        self.def.default_steps = default_steps.clamp(1, crate::spec::MAX_STEPS as u16);
     }
 
     /// Visits every parameter in blob order (`docs/blob-format.md`).

@@ -15,6 +15,7 @@ use crate::frame::IncidentFrame;
 use crate::input::{uniform_pair, unit_direction};
 use crate::math::exp;
 use crate::model::Model;
+use crate::spec;
 use glam::{Vec2, Vec3};
 
 /// A sampled direction and the density it was sampled with (per unit solid angle).
@@ -56,6 +57,18 @@ impl<
         self.def.default_steps as u32
     }
 
+    /// The step count a call runs: `steps`, or the model's default for
+    /// [`spec::DEFAULT_STEPS`] (0); `None` above [`spec::MAX_STEPS`].
+    #[inline]
+    #[must_use]
+    pub fn resolve_steps(&self, steps: u32) -> Option<u32> {
+        match steps {
+            spec::DEFAULT_STEPS => Some(self.default_steps()),
+            n if n <= spec::MAX_STEPS => Some(n),
+            _ => None,
+        }
+    }
+
     /// A direction for `wi` and `u in [0,1]^2`, without its PDF.
     #[inline]
     #[must_use]
@@ -77,14 +90,13 @@ impl<
         self.pdf_steps(wi, wo, self.default_steps())
     }
 
-    /// [`Model::sample_direction`] with `steps` Euler steps (`steps >= 1`).
+    /// [`Model::sample_direction`] with `steps` Euler steps (0: the model's default; at
+    /// most [`spec::MAX_STEPS`], `None` above).
     #[inline]
     #[must_use]
     pub fn sample_direction_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Vec3> {
         let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
-        if steps == 0 {
-            return None;
-        }
+        let steps = self.resolve_steps(steps)?;
         let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
         let x = self.flow(&c, c.base.sample(u), steps);
@@ -92,14 +104,13 @@ impl<
         Some(frame.to_world(wo)).filter(|wo| wo.is_finite())
     }
 
-    /// [`Model::sample`] with `steps` Euler steps (`steps >= 1`).
+    /// [`Model::sample`] with `steps` Euler steps (0: the model's default; at most
+    /// [`spec::MAX_STEPS`], `None` above).
     #[inline]
     #[must_use]
     pub fn sample_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Sample> {
         let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
-        if steps == 0 {
-            return None;
-        }
+        let steps = self.resolve_steps(steps)?;
         let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
         let x0 = c.base.sample(u);
@@ -112,7 +123,8 @@ impl<
         (wo.is_finite() && pdf.is_finite() && pdf > 0.0).then_some(Sample { wo, pdf })
     }
 
-    /// [`Model::pdf`] with `steps` Euler steps (`steps >= 1`); 0 for invalid input.
+    /// [`Model::pdf`] with `steps` Euler steps (0: the model's default; at most
+    /// [`spec::MAX_STEPS`]); 0 for invalid input.
     #[inline]
     #[must_use]
     pub fn pdf_steps(&self, wi: Vec3, wo: Vec3, steps: u32) -> f32 {
@@ -121,9 +133,7 @@ impl<
 
     fn pdf_inner(&self, wi: Vec3, wo: Vec3, steps: u32) -> Option<f32> {
         let (wi, wo) = (self.incident(wi)?, unit_direction(wo)?);
-        if steps == 0 {
-            return None;
-        }
+        let steps = self.resolve_steps(steps)?;
         let domain = self.def.domain;
         let (frame, wi) = self.incident_frame(wi);
         let wo = frame.to_local(wo);

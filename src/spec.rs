@@ -39,6 +39,18 @@ pub const MAX_LAYERS: u8 = 16;
 pub const MAX_FREQS: u8 = 16;
 
 // ---------------------------------------------------------------------------------------
+// Steps
+// ---------------------------------------------------------------------------------------
+
+/// `steps = DEFAULT_STEPS` in a call means the model's own default step count, in every
+/// language (Rust, the C ABI, the generated C, GLSL and WGSL).
+pub const DEFAULT_STEPS: u32 = 0;
+/// Most Euler steps a call may ask for, and a blob may declare as its default: bounds the
+/// work of one call (a larger count gives an invalid result, a blob declaring one is
+/// rejected). Trained models use 1 to 16.
+pub const MAX_STEPS: u32 = 256;
+
+// ---------------------------------------------------------------------------------------
 // Activation: SiLU with the kernel's polynomial exp
 // ---------------------------------------------------------------------------------------
 

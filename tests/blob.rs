@@ -136,6 +136,18 @@ fn header_errors_behind_a_valid_checksum() {
     ));
     assert!(matches!(case(16, 0), BlobError::BadHeader(_)));
     assert!(matches!(case(21, 33), BlobError::BadHeader(_)));
+    // Default steps (bytes 22..24): 0 and anything above spec::MAX_STEPS are rejected.
+    let steps = |n: u16| {
+        let mut b = good.clone();
+        b[22..24].copy_from_slice(&n.to_le_bytes());
+        reseal(&mut b);
+        Model3x32::from_blob(&b).map(|m| m.default_steps())
+    };
+    assert!(matches!(steps(0), Err(BlobError::BadHeader(_))));
+    let max = diffbsdf::spec::MAX_STEPS as u16;
+    assert_eq!(steps(max), Ok(u32::from(max)));
+    assert!(matches!(steps(max + 1), Err(BlobError::BadHeader(_))));
+    assert!(matches!(steps(u16::MAX), Err(BlobError::BadHeader(_))));
     // Flags: bit 0 (isotropic) is the only one defined.
     assert!(matches!(case(28, 2), BlobError::BadHeader(_)));
     assert!(matches!(case(31, 1), BlobError::BadHeader(_)));

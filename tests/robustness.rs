@@ -110,8 +110,19 @@ fn invalid_inputs_are_invalid_results() {
     ] {
         assert!(m.sample(wi, bad_u).is_none());
     }
-    assert!(m.sample_steps(wi, u, 0).is_none());
-    assert_eq!(m.pdf_steps(wi, Vec3::Z, 0), 0.0);
+    // steps = 0 is the model's default; above MAX_STEPS a call gives nothing.
+    assert_eq!(m.sample_steps(wi, u, 0), m.sample(wi, u));
+    assert_eq!(
+        m.sample_direction_steps(wi, u, 0),
+        m.sample_direction(wi, u)
+    );
+    let wo = m.sample(wi, u).map(|s| s.wo).unwrap_or(Vec3::Z);
+    assert_eq!(m.pdf_steps(wi, wo, 0), m.pdf(wi, wo));
+    let over = diffbsdf::spec::MAX_STEPS + 1;
+    assert!(m.sample_steps(wi, u, over).is_none());
+    assert!(m.sample_direction_steps(wi, u, over).is_none());
+    assert_eq!(m.pdf_steps(wi, wo, over), 0.0);
+    assert!(m.sample_steps(wi, u, diffbsdf::spec::MAX_STEPS).is_some());
     // Slightly non-unit input (renderer rounding) is accepted.
     assert!(m.sample(wi * 1.0004, u).is_some());
 }

@@ -121,7 +121,11 @@ fn generated_c_matches_kernel() {
             };
             let code = generate(&model.blob, &options(w, EntryPoints::ALL)).expect("generate");
             let exe = compile(&dir, &code, buffer);
-            for steps in [0u32, 2 * kernel.default_steps()] {
+            for steps in [
+                0u32,
+                2 * kernel.default_steps(),
+                diffbsdf::spec::MAX_STEPS + 1,
+            ] {
                 let out_path = dir.join("out.f32");
                 let mut cmd = Command::new(&exe);
                 cmd.arg(dir.join("s.f32"))
@@ -169,6 +173,11 @@ fn generated_c_matches_kernel() {
                     );
                 }
                 println!("{} buffer={buffer} steps {steps}: {e:?}", model.name);
+                if steps > diffbsdf::spec::MAX_STEPS {
+                    // Every call above the bound is invalid in both (checked above).
+                    assert_eq!(e.valid, 0, "{}: a sample above MAX_STEPS", model.name);
+                    continue;
+                }
                 total.max_dir = total.max_dir.max(e.max_dir);
                 total.max_pdf_rel = total.max_pdf_rel.max(e.max_pdf_rel);
                 total.compared += e.compared;

@@ -9,7 +9,9 @@
  * - Local shading frame: z is the normal; wi points away from the surface.
  * - Directions are float[3], uniform numbers float[2] in [0, 1]; PDFs are per unit solid
  *   angle. A direction is accepted when | |w|^2 - 1 | <= 1e-3 (it is then normalised).
- * - `steps` is the number of Euler steps; 0 means the model's default.
+ * - `steps` is the number of Euler steps; 0 (DIFFBSDF_DEFAULT_STEPS) means the model's
+ *   default; above DIFFBSDF_MAX_STEPS a call gives no sample (PDF 0). The same convention
+ *   holds in Rust and in the generated C, GLSL and WGSL.
  * - Every function returns a diffbsdf_status (or a value that cannot fail). Invalid
  *   numeric input is not an error: sampling answers DIFFBSDF_NO_SAMPLE with zero outputs,
  *   a PDF query answers 0. Null or misaligned pointers (float arrays need 4-byte
@@ -32,6 +34,8 @@
 
 /** Pass as `steps` to use the model's default number of Euler steps. */
 #define DIFFBSDF_DEFAULT_STEPS 0u
+/** Most Euler steps a call may ask for (bounds the work of one call). */
+#define DIFFBSDF_MAX_STEPS 256u
 
 #ifdef __cplusplus
 extern "C" {

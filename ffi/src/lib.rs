@@ -14,11 +14,9 @@
 #![allow(non_camel_case_types)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
-mod model;
 mod status;
 
 use diffbsdf::{AnyModel, NAME_CAPACITY};
-use model::resolve_steps;
 pub use status::diffbsdf_status;
 
 use core::ffi::c_char;
@@ -306,7 +304,6 @@ pub unsafe extern "C" fn diffbsdf_sample_direction(
     guard(|| {
         // SAFETY: forwarded contract for every pointer.
         let m = unsafe { model_ref(model) }?;
-        let steps = resolve_steps(m, steps);
         let (wi, u) = unsafe { (read::<3>(wi)?, read::<2>(u)?) };
         check(wo.cast_const())?;
         let d = m.sample_direction_steps(Vec3::from(wi), Vec2::from(u), steps);
@@ -334,7 +331,6 @@ pub unsafe extern "C" fn diffbsdf_sample(
     guard(|| {
         // SAFETY: forwarded contract for every pointer.
         let m = unsafe { model_ref(model) }?;
-        let steps = resolve_steps(m, steps);
         let (wi, u) = unsafe { (read::<3>(wi)?, read::<2>(u)?) };
         check(out.cast_const())?;
         let s = m.sample_steps(Vec3::from(wi), Vec2::from(u), steps);
@@ -364,7 +360,6 @@ pub unsafe extern "C" fn diffbsdf_pdf(
     guard(|| {
         // SAFETY: forwarded contract for every pointer.
         let m = unsafe { model_ref(model) }?;
-        let steps = resolve_steps(m, steps);
         let (wi, wo) = unsafe { (read::<3>(wi)?, read::<3>(wo)?) };
         let p = m.pdf_steps(Vec3::from(wi), Vec3::from(wo), steps);
         unsafe { write::<1>(pdf, [p]) }?;
@@ -410,7 +405,6 @@ pub unsafe extern "C" fn diffbsdf_sample_direction_batch(
     guard(|| {
         // SAFETY: forwarded contract for every pointer; offsets stay within `count`.
         let m = unsafe { model_ref(model) }?;
-        let steps = resolve_steps(m, steps);
         check_batch(count, [(wi, 3), (u, 2)], (wo.cast_const(), 3))?;
         for i in 0..count {
             let (a, b) = unsafe { (read::<3>(wi.add(3 * i))?, read::<2>(u.add(2 * i))?) };
@@ -437,7 +431,6 @@ pub unsafe extern "C" fn diffbsdf_sample_batch(
     guard(|| {
         // SAFETY: forwarded contract for every pointer; offsets stay within `count`.
         let m = unsafe { model_ref(model) }?;
-        let steps = resolve_steps(m, steps);
         check_batch(count, [(wi, 3), (u, 2)], (out.cast_const().cast(), 4))?;
         check(out.cast_const())?;
         for i in 0..count {
@@ -465,7 +458,6 @@ pub unsafe extern "C" fn diffbsdf_pdf_batch(
     guard(|| {
         // SAFETY: forwarded contract for every pointer; offsets stay within `count`.
         let m = unsafe { model_ref(model) }?;
-        let steps = resolve_steps(m, steps);
         check_batch(count, [(wi, 3), (wo, 3)], (pdf.cast_const(), 1))?;
         for i in 0..count {
             let (a, b) = unsafe { (read::<3>(wi.add(3 * i))?, read::<3>(wo.add(3 * i))?) };

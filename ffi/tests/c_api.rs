@@ -94,6 +94,16 @@ fn header_agrees_with_the_kernel_definition() {
     // The info struct's name holds the kernel's longest name and a NUL.
     let name = format!("char name[{}];", diffbsdf::NAME_CAPACITY + 1);
     assert!(header.contains(&name), "header lacks `{name}`");
+    let steps = [
+        format!(
+            "#define DIFFBSDF_DEFAULT_STEPS {}u",
+            diffbsdf::spec::DEFAULT_STEPS
+        ),
+        format!("#define DIFFBSDF_MAX_STEPS {}u", diffbsdf::spec::MAX_STEPS),
+    ];
+    for line in steps {
+        assert!(header.contains(&line), "header lacks `{line}`");
+    }
 }
 
 #[test]

@@ -158,6 +158,9 @@ impl RawHeader {
         if self.default_steps == 0 {
             return Err(BlobError::BadHeader("default steps is zero"));
         }
+        if u32::from(self.default_steps) > crate::spec::MAX_STEPS {
+            return Err(BlobError::BadHeader("default steps above spec::MAX_STEPS"));
+        }
         let name_bytes = self
             .name
             .get(..self.name_len as usize)

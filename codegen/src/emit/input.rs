@@ -3,7 +3,7 @@
 
 use super::Emitter;
 use crate::dialect::{Math, T};
-use diffbsdf::spec::UNIT_TOLERANCE;
+use diffbsdf::spec::{self, UNIT_TOLERANCE};
 use diffbsdf::Domain;
 
 impl Emitter<'_> {
@@ -56,10 +56,16 @@ impl Emitter<'_> {
         self.code.open(format!("if (!({ok})) {{"));
         self.code.line(fail);
         self.code.close("}");
+        // steps = DEFAULT_STEPS: the model's default; above MAX_STEPS: no sample.
         self.decl(T::U, "n", "steps");
-        self.code.open("if (n == 0u) {");
+        let default = self.u(spec::DEFAULT_STEPS as usize);
+        self.code.open(format!("if (n == {default}) {{"));
         self.code
             .line(format!("n = {}u;", self.m.def.default_steps));
+        self.code.close("}");
+        let max = self.u(spec::MAX_STEPS as usize);
+        self.code.open(format!("if (n > {max}) {{"));
+        self.code.line(fail);
         self.code.close("}");
         self.decl(
             T::F,

@@ -396,6 +396,9 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_direction_impl(float wx, float wy, 
     if (n == 0u) {
         n = 2u;
     }
+    if (n > 256u) {
+        return diffbsdf_tiny_disk_none();
+    }
     float h = 1.0 / float(n);
     diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
     diffbsdf_tiny_disk_Cond cond = diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
@@ -424,6 +427,9 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx, float wy, flo
     uint n = steps;
     if (n == 0u) {
         n = 2u;
+    }
+    if (n > 256u) {
+        return diffbsdf_tiny_disk_none();
     }
     float h = 1.0 / float(n);
     diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
@@ -569,6 +575,9 @@ float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, float ox, float 
     uint n = steps;
     if (n == 0u) {
         n = 2u;
+    }
+    if (n > 256u) {
+        return 0.0;
     }
     float h = 1.0 / float(n);
     diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);

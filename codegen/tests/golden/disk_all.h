@@ -407,6 +407,9 @@ static inline diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_direction_impl(float 
     if (n == 0u) {
         n = 2u;
     }
+    if (n > 256u) {
+        return diffbsdf_tiny_disk_none();
+    }
     float h = 1.0f / (float)(n);
     diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
     diffbsdf_tiny_disk_Cond cond = diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
@@ -435,6 +438,9 @@ static inline diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx,
     unsigned n = steps;
     if (n == 0u) {
         n = 2u;
+    }
+    if (n > 256u) {
+        return diffbsdf_tiny_disk_none();
     }
     float h = 1.0f / (float)(n);
     diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
@@ -580,6 +586,9 @@ static inline float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, fl
     unsigned n = steps;
     if (n == 0u) {
         n = 2u;
+    }
+    if (n > 256u) {
+        return 0.0f;
     }
     float h = 1.0f / (float)(n);
     diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);

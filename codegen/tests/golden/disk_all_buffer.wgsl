@@ -372,6 +372,9 @@ fn diffbsdf_tiny_disk_direction_impl(base: u32, wx: f32, wy: f32, wz: f32, u0: f
     if (n == 0u) {
         n = 2u;
     }
+    if (n > 256u) {
+        return diffbsdf_tiny_disk_none();
+    }
     var h: f32 = 1.0f / f32(n);
     var fr: diffbsdf_tiny_disk_Frame = diffbsdf_tiny_disk_frame(wi.x, wi.y);
     var cond: diffbsdf_tiny_disk_Cond = diffbsdf_tiny_disk_condition(base, diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
@@ -400,6 +403,9 @@ fn diffbsdf_tiny_disk_sample_impl(base: u32, wx: f32, wy: f32, wz: f32, u0: f32,
     var n: u32 = steps;
     if (n == 0u) {
         n = 2u;
+    }
+    if (n > 256u) {
+        return diffbsdf_tiny_disk_none();
     }
     var h: f32 = 1.0f / f32(n);
     var fr: diffbsdf_tiny_disk_Frame = diffbsdf_tiny_disk_frame(wi.x, wi.y);
@@ -545,6 +551,9 @@ fn diffbsdf_tiny_disk_pdf_impl(base: u32, wx: f32, wy: f32, wz: f32, ox: f32, oy
     var n: u32 = steps;
     if (n == 0u) {
         n = 2u;
+    }
+    if (n > 256u) {
+        return 0.0f;
     }
     var h: f32 = 1.0f / f32(n);
     var fr: diffbsdf_tiny_disk_Frame = diffbsdf_tiny_disk_frame(wi.x, wi.y);

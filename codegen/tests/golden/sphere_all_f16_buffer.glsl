@@ -374,6 +374,9 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_direction_impl(uint base, float
     if (n == 0u) {
         n = 2u;
     }
+    if (n > 256u) {
+        return diffbsdf_tiny_sphere_none();
+    }
     float h = 1.0 / float(n);
     diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
     diffbsdf_tiny_sphere_Vec2 x0 = diffbsdf_tiny_sphere_base_sample(cond, u0, u1);
@@ -397,6 +400,9 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx
     uint n = steps;
     if (n == 0u) {
         n = 2u;
+    }
+    if (n > 256u) {
+        return diffbsdf_tiny_sphere_none();
     }
     float h = 1.0 / float(n);
     diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
@@ -538,6 +544,9 @@ float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, flo
     uint n = steps;
     if (n == 0u) {
         n = 2u;
+    }
+    if (n > 256u) {
+        return 0.0;
     }
     float h = 1.0 / float(n);
     diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));

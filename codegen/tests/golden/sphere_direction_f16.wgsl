@@ -287,6 +287,9 @@ fn diffbsdf_tiny_sphere_direction_impl(wx: f32, wy: f32, wz: f32, u0: f32, u1: f
     if (n == 0u) {
         n = 2u;
     }
+    if (n > 256u) {
+        return diffbsdf_tiny_sphere_none();
+    }
     var h: f32 = 1.0f / f32(n);
     var cond: diffbsdf_tiny_sphere_Cond = diffbsdf_tiny_sphere_condition(diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
     var x0: diffbsdf_tiny_sphere_Vec2 = diffbsdf_tiny_sphere_base_sample(cond, u0, u1);

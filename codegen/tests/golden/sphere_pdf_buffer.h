@@ -409,6 +409,9 @@ static inline float diffbsdf_tiny_sphere_pdf_impl(const float *params, float wx,
     if (n == 0u) {
         n = 2u;
     }
+    if (n > 256u) {
+        return 0.0f;
+    }
     float h = 1.0f / (float)(n);
     diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(params, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
     float rho = sqrtf(wo.x * wo.x + wo.y * wo.y);

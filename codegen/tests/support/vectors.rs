@@ -197,22 +197,14 @@ impl Kernel {
     pub fn default_steps(&self) -> u32 {
         self.0.def().default_steps as u32
     }
-    /// `steps = 0` means the default, as in the C API and the generated code.
-    fn steps(&self, steps: u32) -> u32 {
-        if steps == 0 {
-            self.default_steps()
-        } else {
-            steps
-        }
-    }
     pub fn direction(&self, wi: [f32; 3], u: [f32; 2], steps: u32) -> Option<[f32; 3]> {
-        let (wi, u, s) = (Vec3::from(wi), Vec2::from(u), self.steps(steps));
+        let (wi, u, s) = (Vec3::from(wi), Vec2::from(u), steps);
         self.0
             .sample_direction_steps(wi, u, s)
             .map(|v| v.to_array())
     }
     pub fn sample(&self, wi: [f32; 3], u: [f32; 2], steps: u32) -> Option<([f32; 3], f32)> {
-        let (wi, u, s) = (Vec3::from(wi), Vec2::from(u), self.steps(steps));
+        let (wi, u, s) = (Vec3::from(wi), Vec2::from(u), steps);
         self.0
             .sample_steps(wi, u, s)
             .map(|s| (s.wo.to_array(), s.pdf))
@@ -268,7 +260,7 @@ impl Kernel {
     }
 
     pub fn pdf(&self, wi: [f32; 3], wo: [f32; 3], steps: u32) -> f32 {
-        let (wi, wo, s) = (Vec3::from(wi), Vec3::from(wo), self.steps(steps));
+        let (wi, wo, s) = (Vec3::from(wi), Vec3::from(wo), steps);
         self.0.pdf_steps(wi, wo, s)
     }
 }
