@@ -40,6 +40,17 @@ impl Domain {
     }
 }
 
+/// The incident directions `wi` a model is defined for: it returns no sample and PDF 0
+/// for any other `wi`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum IncidentRange {
+    /// `wi.z >= 0` only: reflection-only materials (every disk model; a BRDF fitted on the
+    /// sphere). A renderer flips `wi` and `wo` of a two-sided BRDF before calling.
+    UpperHemisphere,
+    /// Every `wi`: transmissive materials on the sphere.
+    WholeSphere,
+}
+
 /// How weights are stored in the blob. The kernel evaluates in f32 either way; f16 blobs
 /// are half the size, and generated shaders can evaluate them in f16.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -224,6 +235,10 @@ pub struct ModelDef {
     /// The material is unchanged by rotations about the normal: the nets see `wi` turned
     /// into the xz-plane and samples are turned back ([`crate::internals::frame::IncidentFrame`]).
     pub isotropic: bool,
+    /// Which `wi` the model was trained for and answers (blob flag bit 1 on the sphere;
+    /// always the upper hemisphere on the disk). A sphere blob written before the flag
+    /// existed has no bit and means [`IncidentRange::WholeSphere`].
+    pub incident: IncidentRange,
     /// A short label (codegen names things after it).
     pub name: ModelName,
 }
@@ -249,18 +264,31 @@ impl ModelDef {
             },
             default_steps: 4,
             isotropic: false,
+            incident: IncidentRange::UpperHemisphere,
             name: ModelName::EMPTY,
         }
     }
 
-    /// The paper's sphere model: as the disk model but velocity 4x32 and 8 Euler steps.
+    /// The paper's sphere model: as the disk model but velocity 4x32, 8 Euler steps and
+    /// every `wi` (a full BSDF).
     #[must_use]
     pub const fn paper_sphere() -> Self {
         let mut def = Self::paper_disk();
         def.domain = Domain::Sphere;
+        def.incident = IncidentRange::WholeSphere;
         def.velocity.hidden_layers = 4;
         def.default_steps = 8;
         def
+    }
+
+    /// Whether the model answers for incident direction `wi` (any length; checked on
+    /// its `z`): the disk only ever above the surface, the sphere as declared.
+    #[must_use]
+    pub fn accepts_incident_z(&self, wi_z: f32) -> bool {
+        match (self.domain, self.incident) {
+            (Domain::Sphere, IncidentRange::WholeSphere) => true,
+            _ => wi_z >= 0.0,
+        }
     }
 
     /// Inputs of the velocity net's first layer: features, `t`, `wi` encoding.

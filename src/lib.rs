@@ -55,8 +55,8 @@ pub use any_model::AnyModel;
 pub use batch::BatchError;
 pub use blob::BlobError;
 pub use def::{
-    encoding_len, Activation, Domain, Layer, ModelDef, ModelName, Net, NetShape, Precision,
-    NAME_CAPACITY,
+    encoding_len, Activation, Domain, IncidentRange, Layer, ModelDef, ModelName, Net, NetShape,
+    Precision, NAME_CAPACITY,
 };
 pub use model::{Model, Model3x32, Model4x32, MAX_PARAMS_ON_STACK};
 pub use sampler::Sample;

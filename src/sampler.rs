@@ -10,7 +10,6 @@
 //! model's default. Densities are per unit solid angle. Invalid input, or a sample that
 //! leaves the domain, gives `None` (or a PDF of 0): the lost mass is never renormalised.
 
-use crate::def::Domain;
 use crate::frame::IncidentFrame;
 use crate::input::{uniform_pair, unit_direction};
 use crate::math::exp;
@@ -145,14 +144,12 @@ impl<
         pdf.is_finite().then_some(pdf)
     }
 
-    /// `wi` normalised, or `None` if invalid; disk models (BRDFs) take `wi.z >= 0` only.
+    /// `wi` normalised, or `None` if invalid or outside the model's declared incident
+    /// range ([`crate::IncidentRange`]).
     #[inline]
     fn incident(&self, wi: Vec3) -> Option<Vec3> {
         let wi = unit_direction(wi)?;
-        match self.def.domain {
-            Domain::Disk if wi.z < 0.0 => None,
-            _ => Some(wi),
-        }
+        self.def.accepts_incident_z(wi.z).then_some(wi)
     }
 
     /// The frame the nets work in, and `wi` in it: for an isotropic model the rotation that

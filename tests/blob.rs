@@ -148,8 +148,8 @@ fn header_errors_behind_a_valid_checksum() {
     assert_eq!(steps(max), Ok(u32::from(max)));
     assert!(matches!(steps(max + 1), Err(BlobError::BadHeader(_))));
     assert!(matches!(steps(u16::MAX), Err(BlobError::BadHeader(_))));
-    // Flags: bit 0 (isotropic) is the only one defined.
-    assert!(matches!(case(28, 2), BlobError::BadHeader(_)));
+    // Flags: bit 0 (isotropic) and bit 1 (upper hemisphere) are the only ones defined.
+    assert!(matches!(case(28, 4), BlobError::BadHeader(_)));
     assert!(matches!(case(31, 1), BlobError::BadHeader(_)));
     assert!(matches!(case(13, 9), BlobError::BadHeader(_)));
     // A sphere blob has the disk's shape but another domain: the feature count changes

@@ -6,7 +6,7 @@ mod support;
 
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::Diagnostics;
-use diffbsdf::{AnyModel, Domain, Model3x32};
+use diffbsdf::{AnyModel, Domain, IncidentRange, Model3x32};
 use std::path::PathBuf;
 use support::{direction, rel, Rng};
 
@@ -47,21 +47,8 @@ fn shipped() -> Vec<(String, Vec<u8>)> {
     out
 }
 
-/// Whether the model was trained for `wi` below the surface (a transmissive material on
-/// the sphere), as its `fit --json` report records: its quality grid then has
-/// theta_i = 100 deg. A reflection-only model, disk or sphere, is trained and defined for
-/// `wi` above the surface only (renderers flip `wi` of a two-sided BRDF).
-fn trained_below_surface(file: &str) -> bool {
-    let stem = file.trim_end_matches(".dbsdf").trim_end_matches(".f16");
-    let report = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("models")
-        .join(format!("{stem}.report.json"));
-    let text = std::fs::read_to_string(&report).expect("every shipped model has its report");
-    text.contains("\"theta_deg\": 100.0")
-}
-
 /// Incident polar angles: normal incidence to grazing; below the surface too for models
-/// trained there.
+/// declared for them.
 fn incident_thetas(domain: Domain, below: bool) -> Vec<f32> {
     let mut deg = vec![0.0f32, 10.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0, 89.9];
     if domain == Domain::Sphere && below {
@@ -185,7 +172,8 @@ fn shipped_models_are_invertible_and_consistent() {
     let per_model = samples_per_model();
     for (name, bytes) in shipped() {
         let m = AnyModel::from_blob(&bytes).unwrap();
-        let thetas = incident_thetas(m.def().domain, trained_below_surface(&name));
+        let below = m.def().incident == IncidentRange::WholeSphere;
+        let thetas = incident_thetas(m.def().domain, below);
         let per_theta = per_model.div_ceil(thetas.len());
         let results: Vec<Consistency> = std::thread::scope(|scope| {
             let jobs: Vec<_> = thetas
@@ -249,5 +237,32 @@ fn shipped_disk_model_integrates_to_one_minus_lost_mass() {
             integral + lost
         );
         assert!((integral + lost - 1.0).abs() <= 1e-3, "{integral} + {lost}");
+    }
+}
+
+/// Each shipped model declares the incident range it was trained for (its report's
+/// quality grid reaches below the surface exactly when it is declared for the whole
+/// sphere), and answers nothing outside it.
+#[test]
+fn shipped_models_declare_their_incident_range() {
+    for (name, bytes) in shipped() {
+        let m = AnyModel::from_blob(&bytes).unwrap();
+        let stem = name.trim_end_matches(".dbsdf").trim_end_matches(".f16");
+        let report = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("models")
+            .join(format!("{stem}.report.json"));
+        let text = std::fs::read_to_string(&report).expect("every shipped model has its report");
+        let trained_below = text.contains("\"theta_deg\": 100.0");
+        assert_eq!(
+            m.def().incident == IncidentRange::WholeSphere,
+            trained_below,
+            "{name}"
+        );
+        if !trained_below {
+            let below = Vec3::new(0.3, 0.1, -0.9).normalize();
+            assert!(m.sample(below, Vec2::new(0.3, 0.6)).is_none(), "{name}");
+            assert_eq!(m.pdf(below, Vec3::Z), 0.0, "{name}");
+            assert_eq!(m.pdf(below, -below), 0.0, "{name}");
+        }
     }
 }

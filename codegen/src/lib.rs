@@ -207,8 +207,9 @@ pub(crate) fn header_lines(model: &ModelDesc, options: &Options, prefix: &str) -
         ),
         format!("model \"{name}\", blob CRC-32 {:08x}, {} parameters", model.crc32, model.params.len()),
         format!(
-            "domain {domain}{}; base net {}x{} ({} freqs), velocity net {}x{} ({} freqs); {} default steps",
+            "domain {domain}{}{}; base net {}x{} ({} freqs), velocity net {}x{} ({} freqs); {} default steps",
             if d.isotropic { ", isotropic (nets see wi turned to phi = 0)" } else { "" },
+            if d.domain == diffbsdf::Domain::Sphere && !d.accepts_incident_z(-1.0) { ", wi above the surface only" } else { "" },
             d.base.hidden_layers, d.base.width, d.base.freqs, d.velocity.hidden_layers,
             d.velocity.width, d.velocity.freqs, d.default_steps
         ),

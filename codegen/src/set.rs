@@ -44,7 +44,14 @@ pub struct SetCode {
 
 /// The part of a definition the generated code depends on besides the weights.
 fn architecture(d: &ModelDef) -> impl PartialEq {
-    (d.domain, d.activation, d.base, d.velocity, d.isotropic)
+    (
+        d.domain,
+        d.activation,
+        d.base,
+        d.velocity,
+        d.isotropic,
+        d.accepts_incident_z(-1.0),
+    )
 }
 
 fn namer(language: Language) -> Namer {

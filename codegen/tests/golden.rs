@@ -29,6 +29,7 @@ fn tiny(domain: Domain, name: &str) -> Vec<u8> {
         },
         default_steps: 2,
         isotropic: domain == Domain::Disk,
+        incident: diffbsdf::IncidentRange::WholeSphere,
         name: ModelName::new(name).expect("name"),
     };
     random_blob(&def, 5, 1.0)

@@ -83,6 +83,8 @@ typedef struct diffbsdf_info {
     uint32_t velocity_width;         /**< Neurons per hidden layer of the velocity net. */
     uint32_t param_count;            /**< Weights and biases of both nets. */
     uint32_t isotropic;              /**< 1: nets see wi turned to phi = 0 (isotropic BSDF). */
+    uint32_t incident_range;         /**< 0: wi.z >= 0 only (other wi: no sample, PDF 0);
+                                          1: the whole sphere. */
     char name[33];                   /**< The model's name, NUL-terminated. */
 } diffbsdf_info;
 

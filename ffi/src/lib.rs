@@ -22,7 +22,7 @@ pub use status::diffbsdf_status;
 use core::ffi::c_char;
 use core::mem::{align_of, size_of};
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::{Domain, Precision, Sample};
+use diffbsdf::{Domain, IncidentRange, Precision, Sample};
 use status::diffbsdf_status as S;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -55,6 +55,9 @@ pub struct diffbsdf_info {
     pub param_count: u32,
     /// 1 when the model is isotropic (its nets see `wi` turned to `phi = 0`).
     pub isotropic: u32,
+    /// The `wi` the model answers: 0 above the surface only (`wi.z >= 0`; other `wi` give
+    /// no sample and PDF 0), 1 the whole sphere.
+    pub incident_range: u32,
     /// The model's name, NUL-terminated.
     pub name: [c_char; NAME_CAPACITY + 1],
 }
@@ -281,6 +284,10 @@ pub unsafe extern "C" fn diffbsdf_model_info(
             velocity_width: def.velocity.width as u32,
             param_count: def.param_count() as u32,
             isotropic: def.isotropic as u32,
+            incident_range: match def.incident {
+                IncidentRange::UpperHemisphere => 0,
+                IncidentRange::WholeSphere => 1,
+            },
             name,
         };
         // SAFETY: non-null and aligned (checked), writable by contract.

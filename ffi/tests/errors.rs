@@ -64,7 +64,7 @@ fn every_blob_error_has_its_status() {
     b[12] = 7;
     assert_eq!(load(&reseal(b)), DIFFBSDF_ERR_UNKNOWN_ACTIVATION);
     let mut b = good.clone();
-    b[28] = 2; // an unknown flag bit (bit 0 is "isotropic")
+    b[28] = 4; // an unknown flag bit (bit 0 is "isotropic", bit 1 "upper hemisphere")
     assert_eq!(load(&reseal(b)), DIFFBSDF_ERR_BAD_HEADER);
     let mut b = good.clone();
     b[24] ^= 1; // declared parameter count (the length check sees it first)

@@ -13,7 +13,9 @@ pub use crc32::crc32;
 pub use error::BlobError;
 pub use writer::{blob_len, write_blob};
 
-use crate::def::{Activation, Domain, ModelDef, ModelName, NetShape, Precision, NAME_CAPACITY};
+use crate::def::{
+    Activation, Domain, IncidentRange, ModelDef, ModelName, NetShape, Precision, NAME_CAPACITY,
+};
 use cursor::Cursor;
 
 /// The first 8 bytes of every blob.
@@ -145,7 +147,7 @@ impl RawHeader {
         let domain = Domain::from_code(self.domain).ok_or(BlobError::UnknownDomain(self.domain))?;
         let activation = Activation::from_code(self.activation)
             .ok_or(BlobError::UnknownActivation(self.activation))?;
-        if self.flags & !FLAG_ISOTROPIC != 0 {
+        if self.flags & !(FLAG_ISOTROPIC | FLAG_UPPER_HEMISPHERE) != 0 {
             return Err(BlobError::BadHeader("unknown flag bits are set"));
         }
         check_shape(self.base, "base net")?;
@@ -175,6 +177,11 @@ impl RawHeader {
             velocity: self.velocity,
             default_steps: self.default_steps,
             isotropic: self.flags & FLAG_ISOTROPIC != 0,
+            incident: if self.flags & FLAG_UPPER_HEMISPHERE != 0 || domain == Domain::Disk {
+                IncidentRange::UpperHemisphere
+            } else {
+                IncidentRange::WholeSphere
+            },
             name,
         };
         let from_shape = def.param_count();
@@ -190,6 +197,9 @@ impl RawHeader {
 
 /// Header flag (bytes 28..32, u32): the model is isotropic.
 pub(crate) const FLAG_ISOTROPIC: u32 = 1;
+/// Header flag: the model is defined for `wi` above the surface only
+/// ([`IncidentRange::UpperHemisphere`]); implied on the disk, written there too.
+pub(crate) const FLAG_UPPER_HEMISPHERE: u32 = 2;
 
 use crate::spec::{MAX_FREQS, MAX_LAYERS, MAX_WIDTH};
 

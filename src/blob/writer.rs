@@ -1,6 +1,10 @@
 //! Writes a blob into a caller's buffer (no allocation, so it works in `no_std` too).
 
-use super::{crc32, BlobError, CHECKSUM_LEN, FLAG_ISOTROPIC, HEADER_LEN, MAGIC, VERSION};
+use super::{
+    crc32, BlobError, CHECKSUM_LEN, FLAG_ISOTROPIC, FLAG_UPPER_HEMISPHERE, HEADER_LEN, MAGIC,
+    VERSION,
+};
+use crate::def::{Domain, IncidentRange};
 use crate::def::{ModelDef, NetShape, Precision, NAME_CAPACITY};
 
 /// Bytes of the blob for `def`.
@@ -64,7 +68,11 @@ fn write_header(def: &ModelDef, h: &mut [u8]) {
     h[21] = def.name.as_bytes().len() as u8;
     h[22..24].copy_from_slice(&def.default_steps.to_le_bytes());
     h[24..28].copy_from_slice(&(def.param_count() as u32).to_le_bytes());
-    let flags = if def.isotropic { FLAG_ISOTROPIC } else { 0 };
+    let mut flags = if def.isotropic { FLAG_ISOTROPIC } else { 0 };
+    // Implied on the disk: disk blobs keep the bytes they had before the flag existed.
+    if def.domain == Domain::Sphere && def.incident == IncidentRange::UpperHemisphere {
+        flags |= FLAG_UPPER_HEMISPHERE;
+    }
     h[28..32].copy_from_slice(&flags.to_le_bytes());
     h[32..32 + def.name.as_bytes().len()].copy_from_slice(def.name.as_bytes());
     debug_assert!(def.name.as_bytes().len() <= NAME_CAPACITY);

@@ -12,7 +12,7 @@ use crate::mlp::Mlp;
 use crate::progress::Progress;
 use crate::reflow::reflow_pairs;
 use diffbsdf::spec::MAX_FREQS;
-use diffbsdf::{AnyModel, Domain, ModelDef, ModelName, Net, NetShape};
+use diffbsdf::{AnyModel, Domain, IncidentRange, ModelDef, ModelName, Net, NetShape};
 use diffbsdf_materials::Material;
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
@@ -269,6 +269,12 @@ pub fn fit_data(
     def.name = ModelName::new(name).ok_or(TrainError::NameTooLong)?;
     def.default_steps = def.default_steps.max(1);
     def.isotropic = data.isotropic;
+    // The model is declared for the incident directions it was trained on.
+    def.incident = if data.wi.iter().any(|wi| wi[2] < 0.0) {
+        IncidentRange::WholeSphere
+    } else {
+        IncidentRange::UpperHemisphere
+    };
     // Fail before training, not at export.
     if !AnyModel::accepts(&def) {
         return Err(TrainError::Blob(diffbsdf::BlobError::ShapeMismatch));

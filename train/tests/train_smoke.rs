@@ -2,7 +2,7 @@
 //! the kernel, forward and inverse PDFs agree, and the same seed gives the same bytes.
 
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::{Domain, Model3x32, Model4x32, Precision};
+use diffbsdf::{Domain, IncidentRange, Model3x32, Model4x32, Precision};
 use diffbsdf_materials::parse_spec;
 use diffbsdf_train::{fit_material, FitConfig, Fitted, ModelExt, Silent};
 
@@ -126,4 +126,33 @@ fn isotropic_materials_are_fitted_in_the_incident_frame() {
     cfg.use_isotropy = false;
     let f = fit_material(iso.as_ref(), "b", &cfg, &Silent).unwrap();
     assert!(!f.model.def().isotropic);
+}
+
+#[test]
+fn models_declare_the_incident_range_they_were_trained_on() {
+    // A BRDF fitted on the sphere is trained (and declared) for wi above the surface only;
+    // a transmissive material on the sphere for every wi; a disk model always above.
+    let cases = [
+        (
+            "conductor:ggx,alpha=0.3,metal=Cu",
+            Domain::Sphere,
+            IncidentRange::UpperHemisphere,
+        ),
+        (
+            "dielectric:beckmann,alpha=0.3,eta=1.5",
+            Domain::Sphere,
+            IncidentRange::WholeSphere,
+        ),
+        (
+            "conductor:ggx,alpha=0.3,metal=Cu",
+            Domain::Disk,
+            IncidentRange::UpperHemisphere,
+        ),
+    ];
+    for (spec, domain, want) in cases {
+        let f = tiny_fit(spec, domain, 5);
+        let blob = f.model.blob(Precision::F32).unwrap();
+        let loaded = diffbsdf::AnyModel::from_blob(&blob).unwrap();
+        assert_eq!(loaded.def().incident, want, "{spec} on {domain:?}");
+    }
 }

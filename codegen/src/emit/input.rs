@@ -4,7 +4,6 @@
 use super::Emitter;
 use crate::dialect::{Math, T};
 use diffbsdf::spec::{self, UNIT_TOLERANCE};
-use diffbsdf::Domain;
 
 impl Emitter<'_> {
     pub(super) fn unit(&mut self) {
@@ -41,7 +40,8 @@ impl Emitter<'_> {
         let inc = self.call("unit", false, &["wx", "wy", "wz"]);
         self.decl(ut, "wi", &inc);
         let mut ok = "wi.ok".to_string();
-        if self.m.def.domain == Domain::Disk {
+        // The model's declared incident range (always the upper hemisphere on the disk).
+        if !self.m.def.accepts_incident_z(-1.0) {
             ok.push_str(&format!(" && wi.z >= {}", self.f(0.0)));
         }
         if with_u {
