@@ -58,7 +58,7 @@ pub use def::{
     encoding_len, Activation, Domain, IncidentRange, Layer, ModelDef, ModelName, Net, NetShape,
     Precision, NAME_CAPACITY,
 };
-pub use model::{Model, Model3x32, Model4x32, MAX_PARAMS_ON_STACK};
+pub use model::{Model, Model3x32, Model4x32};
 pub use sampler::Sample;
 
 pub use glam;

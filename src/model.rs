@@ -1,6 +1,6 @@
 //! A loaded model: its definition and its two nets, sized at compile time.
 
-use crate::blob::{write_blob, Blob, BlobError};
+use crate::blob::{write_blob_with, Blob, BlobError};
 use crate::def::{encoding_len, ModelDef, Precision};
 use crate::net::{BaseNet, VelocityNet};
 
@@ -116,27 +116,22 @@ impl<
         let out = out
             .get_mut(..n)
             .ok_or(BlobError::BufferTooSmall { needed: n * 4, got })?;
-        let mut copy = *self;
         let mut it = out.iter_mut();
-        copy.visit_params_mut(|p| {
+        self.visit_params(|p| {
             if let Some(o) = it.next() {
-                *o = *p;
+                *o = p;
             }
         });
         Ok(n)
     }
 
     /// Writes the model as a blob of the given precision into `out`; returns its length.
+    /// The parameters go straight from the model into `out` (no staging copy, so this
+    /// works on a small embedded stack); on error `out`'s contents are unspecified.
     pub fn write_blob(&self, precision: Precision, out: &mut [u8]) -> Result<usize, BlobError> {
         let mut def = self.def;
         def.precision = precision;
-        let mut params = [0.0f32; MAX_PARAMS_ON_STACK];
-        let n = def.param_count();
-        let params = params.get_mut(..n).ok_or(BlobError::BadHeader(
-            "model too large to write without allocation",
-        ))?;
-        self.params(params)?;
-        write_blob(&def, params, out)
+        write_blob_with(&def, out, |emit| self.visit_params(emit))
     }
 
     /// The definition.
@@ -151,6 +146,13 @@ impl<
         self.def.default_steps = default_steps.clamp(1, crate::spec::MAX_STEPS as u16);
     }
 
+    /// Reads every parameter in blob order (the order of `visit_params_mut`).
+    fn visit_params(&self, mut f: impl FnMut(f32)) {
+        let features = self.def.domain.feature_count();
+        self.base.visit(&mut f);
+        self.velocity.visit(features, &mut f);
+    }
+
     /// Visits every parameter in blob order (`docs/blob-format.md`).
     fn visit_params_mut(&mut self, mut f: impl FnMut(&mut f32)) {
         let features = self.def.domain.feature_count();
@@ -158,7 +160,3 @@ impl<
         self.velocity.visit_mut(features, &mut f);
     }
 }
-
-/// Largest parameter count [`Model::write_blob`] handles (it stages parameters on the
-/// stack); larger models are written with [`crate::blob::write_blob`] from a caller buffer.
-pub const MAX_PARAMS_ON_STACK: usize = 16_384;

@@ -1,4 +1,5 @@
-//! The `diffbsdf` command line ([`cli`]): fit, eval, demo, material, codegen and the
+//! The `diffbsdf` command line ([`cli`]): fit, eval, demo, material, sample and pdf (of
+//! a blob), codegen and the
 //! step-count tradeoff report ([`tradeoff`]), over the reference materials
 //! (`diffbsdf-materials`) and the trainer (`diffbsdf-train`).
 

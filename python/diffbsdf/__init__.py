@@ -16,6 +16,13 @@ non-contiguous, a list of floats) is converted once with ``numpy.ascontiguousarr
 dtype=float32)``. Integer, complex, bool or object arrays raise ``TypeError``; a wrong
 shape or differing lengths raise ``ValueError``. Outputs are new float32 / bool arrays.
 
+Reference materials (``Material``): the analytic and measured BSDFs a model is trained
+on, with the same array conventions, to compare a learned model with its target::
+
+    cu = diffbsdf.Material.from_spec("conductor:ggx,alpha=0.3,metal=Cu")
+    f_cos = cu.eval(wi, wo)               # (N, 3) RGB f * |cos theta_o|
+    wo, pdf, valid = cu.sample(wi, u3)     # u3: (N, 3), the third number picks a lobe
+
 Threads: the GIL is released and a batch is split into contiguous chunks over
 ``threads`` OS threads (default: ``available_threads()``, i.e. the machine's available
 parallelism; set ``Model.threads`` or pass ``threads=`` per call). Every row is
@@ -29,9 +36,24 @@ from typing import Optional, Tuple, Union
 
 import numpy as np
 
-from ._diffbsdf import KERNEL_VERSION, BlobFormatError, RawModel, available_threads
+from ._diffbsdf import (
+    KERNEL_VERSION,
+    MAX_STEPS,
+    BlobFormatError,
+    RawMaterial,
+    RawModel,
+    available_threads,
+)
 
-__all__ = ["Model", "BlobFormatError", "available_threads", "KERNEL_VERSION", "as_rows"]
+__all__ = [
+    "Model",
+    "Material",
+    "BlobFormatError",
+    "available_threads",
+    "KERNEL_VERSION",
+    "MAX_STEPS",
+    "as_rows",
+]
 __version__ = KERNEL_VERSION
 
 PathOrBytes = Union[str, "os.PathLike[str]", bytes, bytearray, memoryview]
@@ -99,6 +121,12 @@ class Model:
         return self._raw.isotropic
 
     @property
+    def incident_range(self) -> str:
+        """``"upper_hemisphere"`` (``wi.z >= 0`` only; other ``wi`` give invalid rows and
+        PDF 0) or ``"whole_sphere"``: the ``wi`` the model was trained for."""
+        return self._raw.incident_range
+
+    @property
     def precision(self) -> str:
         """``"f32"`` or ``"f16"``: how the blob stores weights (evaluation is f32)."""
         return self._raw.precision
@@ -149,3 +177,103 @@ class Model:
         if t is not None and (isinstance(t, bool) or not isinstance(t, (int, np.integer))):
             raise TypeError(f"threads must be an int >= 1 or None, got {type(t).__name__}")
         return None if t is None else int(t)
+
+
+def _check_threads(threads: Optional[int]) -> Optional[int]:
+    if threads is not None and (
+        isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
+    ):
+        raise TypeError(f"threads must be an int >= 1 or None, got {type(threads).__name__}")
+    return None if threads is None else int(threads)
+
+
+class Material:
+    """A reference material of ``diffbsdf-materials``: its BSDF, its own sampler and PDF.
+
+    Conventions are the kernel's: local shading frame, ``z`` the normal, unit ``wi`` and
+    ``wo`` pointing away from the surface, PDFs per unit solid angle. ``eval`` returns
+    ``f(wi, wo) * |cos theta_o|`` per RGB channel (what Mitsuba's ``BSDF.eval`` returns);
+    ``eval_luminance`` its Rec. 709 luminance. A direction that is not finite or not unit
+    within the kernel's tolerance (``| |w|^2 - 1 | <= 1e-3``; it is then normalised), or a
+    ``u`` outside [0, 1], gives a zero row (``valid = False`` for ``sample``).
+    Computation is in float64, outputs are float32. Arrays as for ``Model``.
+    """
+
+    __slots__ = ("_raw", "threads")
+
+    def __init__(self, raw: RawMaterial, threads: Optional[int] = None) -> None:
+        self._raw = raw
+        #: Threads per batch call; ``None`` means ``available_threads()``.
+        self.threads: Optional[int] = threads
+
+    @classmethod
+    def from_spec(cls, spec: str, threads: Optional[int] = None) -> "Material":
+        """A material from the spec of ``diffbsdf material`` / ``diffbsdf fit``, e.g.
+        ``"conductor:ggx,alpha=0.3,metal=Cu"``, ``"dielectric:beckmann,alpha=0.3,eta=1.5"``,
+        ``"rgl:path/file_rgb.bsdf"`` (grammar: ``materials/MATERIALS.md``).
+
+        Raises ``ValueError`` for a spec that does not parse, ``OSError`` for an RGL file
+        that cannot be read.
+        """
+        if not isinstance(spec, str):
+            raise TypeError(f"Material.from_spec takes a str, got {type(spec).__name__}")
+        return cls(RawMaterial.from_spec(spec), threads)
+
+    @classmethod
+    def rgl(cls, path: "Union[str, os.PathLike[str]]", threads: Optional[int] = None) -> "Material":
+        """An RGL measured material (``*_rgb.bsdf``, Dupuy & Jakob 2018).
+
+        Raises ``OSError`` (``FileNotFoundError``) for an unreadable file, ``ValueError``
+        for a file that is not a valid RGL tensor file.
+        """
+        if not isinstance(path, (str, os.PathLike)):
+            raise TypeError(f"Material.rgl takes a path, got {type(path).__name__}")
+        return cls(RawMaterial.rgl(os.fspath(path)), threads)
+
+    @property
+    def name(self) -> str:
+        """The model: ``"conductor"``, ``"dielectric"``, ``"rgl"``, ..."""
+        return self._raw.name
+
+    @property
+    def spec(self) -> str:
+        """The spec that ``from_spec`` turns back into this material."""
+        return self._raw.spec
+
+    @property
+    def transmissive(self) -> bool:
+        return self._raw.transmissive
+
+    @property
+    def isotropic(self) -> bool:
+        return self._raw.isotropic
+
+    def __repr__(self) -> str:
+        return f"diffbsdf.Material({self.spec!r})"
+
+    def eval(self, wi: object, wo: object, threads: Optional[int] = None) -> np.ndarray:
+        """``f(wi, wo) * |cos theta_o|`` per RGB channel, ``(N, 3)`` float32."""
+        return self._raw.eval(as_rows(wi, 3, "wi"), as_rows(wo, 3, "wo"), self._threads(threads))
+
+    def eval_luminance(self, wi: object, wo: object, threads: Optional[int] = None) -> np.ndarray:
+        """Luminance of ``f(wi, wo) * |cos theta_o|``, ``(N,)`` float32."""
+        return self._raw.eval_luminance(
+            as_rows(wi, 3, "wi"), as_rows(wo, 3, "wo"), self._threads(threads)
+        )
+
+    def sample(
+        self, wi: object, u: object, threads: Optional[int] = None
+    ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The material's own sampler: ``(wo (N,3) float32, pdf (N,) float32, valid (N,) bool)``.
+
+        ``u`` is ``(N, 3)`` in [0, 1]: two numbers for the direction, the third picks a lobe
+        (unused by single-lobe materials). Invalid rows (lost mass) are 0.
+        """
+        return self._raw.sample(as_rows(wi, 3, "wi"), as_rows(u, 3, "u"), self._threads(threads))
+
+    def pdf(self, wi: object, wo: object, threads: Optional[int] = None) -> np.ndarray:
+        """Density of the material's sampler at ``wo``, per unit solid angle, ``(N,)`` float32."""
+        return self._raw.pdf(as_rows(wi, 3, "wi"), as_rows(wo, 3, "wo"), self._threads(threads))
+
+    def _threads(self, threads: Optional[int]) -> Optional[int]:
+        return _check_threads(self.threads if threads is None else threads)

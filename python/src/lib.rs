@@ -6,12 +6,19 @@
 //! new numpy arrays written in place by the kernel's batch functions. The friendlier
 //! conversions (any float dtype, non-contiguous input) live in the Python wrapper
 //! `diffbsdf/__init__.py`; this module rejects anything else with a clear exception.
+//!
+//! `RawMaterial` (module `material`) exposes the reference materials of
+//! `diffbsdf-materials` with the same array conventions.
+
+mod material;
 
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::{AnyModel, BatchError, BlobError, Domain, Precision, Sample};
+use diffbsdf_materials::rgl::RglError;
+use diffbsdf_materials::SpecError;
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use std::fmt;
@@ -39,7 +46,7 @@ enum BindError {
     Shape { arg: &'static str, detail: String },
     /// Two arguments differ in length.
     Length { a: usize, b: usize },
-    /// `steps` out of range.
+    /// `steps` out of range (1 to `MAX_STEPS`).
     Steps(i64),
     /// `threads` out of range.
     Threads(i64),
@@ -47,6 +54,10 @@ enum BindError {
     Batch(BatchError),
     /// A worker thread panicked (cannot happen: the kernel is panic-free).
     Worker,
+    /// A material spec did not parse.
+    Spec(SpecError),
+    /// An RGL file did not load.
+    Rgl(String, RglError),
 }
 
 impl fmt::Display for BindError {
@@ -59,11 +70,17 @@ impl fmt::Display for BindError {
                 write!(f, "batch lengths differ: {a} and {b} rows")
             }
             BindError::Steps(s) => {
-                write!(f, "steps must be >= 1 (or None for the default), got {s}")
+                write!(
+                    f,
+                    "steps must be >= 1 and <= {} (or None for the default), got {s}",
+                    diffbsdf::spec::MAX_STEPS
+                )
             }
             BindError::Threads(t) => write!(f, "threads must be >= 1 (or None), got {t}"),
             BindError::Batch(e) => write!(f, "batch call failed: {e}"),
             BindError::Worker => write!(f, "a worker thread failed"),
+            BindError::Spec(e) => write!(f, "material spec: {e}"),
+            BindError::Rgl(path, e) => write!(f, "RGL file {path}: {e}"),
         }
     }
 }
@@ -80,6 +97,15 @@ impl From<BindError> for PyErr {
             | BindError::Threads(_)
             | BindError::Batch(_) => PyValueError::new_err(msg),
             BindError::Worker => pyo3::exceptions::PyRuntimeError::new_err(msg),
+            BindError::Spec(SpecError::Rgl(RglError::Io(kind)))
+            | BindError::Rgl(_, RglError::Io(kind)) => {
+                if kind == std::io::ErrorKind::NotFound {
+                    PyFileNotFoundError::new_err(msg)
+                } else {
+                    PyOSError::new_err(msg)
+                }
+            }
+            BindError::Spec(_) | BindError::Rgl(..) => PyValueError::new_err(msg),
         }
     }
 }
@@ -92,7 +118,7 @@ fn default_threads() -> usize {
 fn check_steps(steps: Option<i64>, default: u32) -> Result<u32, BindError> {
     match steps {
         None => Ok(default),
-        Some(s) if s >= 1 && s <= i64::from(u32::MAX) => {
+        Some(s) if s >= 1 && s <= i64::from(diffbsdf::spec::MAX_STEPS) => {
             u32::try_from(s).map_err(|_| BindError::Steps(s))
         }
         Some(s) => Err(BindError::Steps(s)),
@@ -243,6 +269,14 @@ impl RawModel {
     #[getter]
     fn isotropic(&self) -> bool {
         self.model.def().isotropic
+    }
+
+    #[getter]
+    fn incident_range(&self) -> &'static str {
+        match self.model.def().incident {
+            diffbsdf::IncidentRange::UpperHemisphere => "upper_hemisphere",
+            diffbsdf::IncidentRange::WholeSphere => "whole_sphere",
+        }
     }
 
     #[getter]
@@ -419,8 +453,10 @@ fn available_threads() -> usize {
 #[pymodule]
 fn _diffbsdf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<RawModel>()?;
+    m.add_class::<material::RawMaterial>()?;
     m.add_function(wrap_pyfunction!(available_threads, m)?)?;
     m.add("BlobFormatError", m.py().get_type::<BlobFormatError>())?;
     m.add("KERNEL_VERSION", env!("CARGO_PKG_VERSION"))?;
+    m.add("MAX_STEPS", diffbsdf::spec::MAX_STEPS)?;
     Ok(())
 }

@@ -64,6 +64,14 @@ def test_definition_properties(copper, glass, models):
     assert glass.domain == "sphere"
     assert glass.default_steps == 8
     assert glass.shape[1] == (5, 32, 4)
+    assert copper.incident_range == "upper_hemisphere"
+    assert glass.incident_range == "whole_sphere"
+    cu_sphere = diffbsdf.Model.load(models / "conductor-ggx-a0.3-cu-sphere.dbsdf")
+    assert cu_sphere.incident_range == "upper_hemisphere"
+    below = np.array([[0.3, 0.1, -0.9]], dtype=np.float32)
+    below /= np.linalg.norm(below, axis=1, keepdims=True)
+    wo, pdf, valid = cu_sphere.sample(below, np.array([[0.3, 0.6]], dtype=np.float32))
+    assert not valid[0] and pdf[0] == 0
     half = diffbsdf.Model.load(models / "conductor-ggx-a0.3-cu-disk.f16.dbsdf")
     assert half.precision == "f16"
     assert "conductor-ggx-a0.3-cu-disk" in repr(copper)
@@ -283,7 +291,7 @@ def test_steps_handling(copper):
     # at or above the default step count the PDF stays exact for the steps it was run with
     again = copper.pdf(wi, wo8, steps=8)
     assert np.max(np.abs(again[v8] - pdf8[v8]) / pdf8[v8]) <= 1e-4
-    for bad in (0, -1):
+    for bad in (0, -1, diffbsdf.MAX_STEPS + 1):
         for call in (
             lambda: copper.sample(wi, u, steps=bad),
             lambda: copper.sample_direction(wi, u, steps=bad),

@@ -11,6 +11,7 @@ mod writer;
 
 pub use crc32::crc32;
 pub use error::BlobError;
+pub(crate) use writer::write_blob_with;
 pub use writer::{blob_len, write_blob};
 
 use crate::def::{

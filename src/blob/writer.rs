@@ -28,28 +28,70 @@ pub fn write_blob(def: &ModelDef, params: &[f32], out: &mut [u8]) -> Result<usiz
     if let Some(index) = params.iter().position(|w| !w.is_finite()) {
         return Err(BlobError::NonFiniteWeight { index });
     }
+    write_blob_with(def, out, |emit| params.iter().for_each(|&w| emit(w)))
+}
+
+/// Writes `def` and the parameters that `visit` passes to its argument, in blob order,
+/// straight into `out`. Returns the number of bytes written; fails on a parameter count
+/// other than `def.param_count()`, a non-finite value (also after rounding to f16) or a
+/// short `out` (whose contents are then unspecified).
+pub(crate) fn write_blob_with(
+    def: &ModelDef,
+    out: &mut [u8],
+    visit: impl FnOnce(&mut dyn FnMut(f32)),
+) -> Result<usize, BlobError> {
+    let count = def.param_count();
     let len = blob_len(def);
     let got = out.len();
     let out = out
         .get_mut(..len)
         .ok_or(BlobError::BufferTooSmall { needed: len, got })?;
-    write_header(def, &mut out[..HEADER_LEN]);
-    let body = &mut out[HEADER_LEN..len - CHECKSUM_LEN];
-    match def.precision {
-        Precision::F32 => {
-            for (dst, w) in body.chunks_exact_mut(4).zip(params) {
-                dst.copy_from_slice(&w.to_le_bytes());
-            }
+    let (header, rest) = out.split_at_mut(HEADER_LEN);
+    write_header(def, header);
+    let body = rest
+        .get_mut(..len - HEADER_LEN - CHECKSUM_LEN)
+        .ok_or(BlobError::BufferTooSmall { needed: len, got })?;
+    let precision = def.precision;
+    let mut index = 0usize;
+    let mut error = None;
+    visit(&mut |w: f32| {
+        if error.is_some() {
+            return;
         }
-        Precision::F16 => {
-            for (index, (dst, w)) in body.chunks_exact_mut(2).zip(params).enumerate() {
-                let h = half::f16::from_f32(*w);
-                if !h.is_finite() {
-                    return Err(BlobError::NonFiniteWeight { index });
+        let at = index;
+        index += 1;
+        let dst = body.get_mut(at * precision.bytes()..(at + 1) * precision.bytes());
+        let (Some(dst), true) = (dst, w.is_finite()) else {
+            error = Some(if at >= count {
+                BlobError::ParamCountMismatch {
+                    declared: index as u32,
+                    from_shape: count,
                 }
-                dst.copy_from_slice(&h.to_bits().to_le_bytes());
+            } else {
+                BlobError::NonFiniteWeight { index: at }
+            });
+            return;
+        };
+        match precision {
+            Precision::F32 => dst.copy_from_slice(&w.to_le_bytes()),
+            Precision::F16 => {
+                let h = half::f16::from_f32(w);
+                if h.is_finite() {
+                    dst.copy_from_slice(&h.to_bits().to_le_bytes());
+                } else {
+                    error = Some(BlobError::NonFiniteWeight { index: at });
+                }
             }
         }
+    });
+    if let Some(e) = error {
+        return Err(e);
+    }
+    if index != count {
+        return Err(BlobError::ParamCountMismatch {
+            declared: index as u32,
+            from_shape: count,
+        });
     }
     let crc = crc32(&out[..len - CHECKSUM_LEN]);
     out[len - CHECKSUM_LEN..].copy_from_slice(&crc.to_le_bytes());

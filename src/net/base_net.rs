@@ -42,4 +42,13 @@ impl<const E: usize, const W: usize, const M: usize> BaseNet<E, W, M> {
         }
         self.out.visit_mut(f);
     }
+
+    /// Reads every parameter in the order of [`BaseNet::visit_mut`].
+    pub(crate) fn visit(&self, f: &mut impl FnMut(f32)) {
+        self.first.visit(f);
+        for layer in self.mid.iter() {
+            layer.visit(f);
+        }
+        self.out.visit(f);
+    }
 }

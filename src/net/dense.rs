@@ -65,6 +65,16 @@ impl<const I: usize, const O: usize> Dense<I, O> {
         }
         self.b.iter_mut().for_each(f);
     }
+
+    /// Reads every parameter in the order of [`Dense::visit_mut`].
+    pub(crate) fn visit(&self, f: &mut impl FnMut(f32)) {
+        for o in 0..O {
+            for col in self.w.iter() {
+                f(col[o]);
+            }
+        }
+        self.b.iter().for_each(|&b| f(b));
+    }
 }
 
 /// Lanes of the partial sums in a dot product: lets the compiler vectorise a reduction
@@ -142,5 +152,13 @@ impl<const I: usize, const O: usize> Readout<I, O> {
             row.iter_mut().for_each(&mut *f);
         }
         self.b.iter_mut().for_each(f);
+    }
+
+    /// Reads every parameter in the order of [`Readout::visit_mut`].
+    pub(crate) fn visit(&self, f: &mut impl FnMut(f32)) {
+        for row in self.w.iter() {
+            row.iter().for_each(|&w| f(w));
+        }
+        self.b.iter().for_each(|&b| f(b));
     }
 }

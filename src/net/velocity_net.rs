@@ -128,4 +128,22 @@ impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
         }
         self.out.visit_mut(f);
     }
+
+    /// Reads every parameter in the order of [`VelocityNet::visit_mut`].
+    pub(crate) fn visit(&self, feature_count: usize, f: &mut impl FnMut(f32)) {
+        for o in 0..W {
+            for col in self.wx.iter().take(feature_count) {
+                f(col[o]);
+            }
+            f(self.wt[o]);
+            for col in self.wc.w.iter() {
+                f(col[o]);
+            }
+        }
+        self.wc.b.iter().for_each(|&b| f(b));
+        for layer in self.mid.iter() {
+            layer.visit(f);
+        }
+        self.out.visit(f);
+    }
 }

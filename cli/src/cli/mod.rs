@@ -1,6 +1,7 @@
 //! The `diffbsdf` command line. Each top-level subcommand lives in its own file and adds
 //! one variant to [`Command`]; [`run`] dispatches.
 
+pub mod blob;
 pub mod choose;
 pub mod codegen;
 pub mod demo;
@@ -28,6 +29,10 @@ pub enum Command {
     /// Reference materials: evaluate and sample them.
     #[command(subcommand)]
     Material(material::MaterialCommand),
+    /// Draw directions (and their PDFs) from a weight blob.
+    Sample(blob::SampleArgs),
+    /// The PDF of given directions under a weight blob (`--wo -`: rows from stdin).
+    Pdf(blob::PdfArgs),
     /// Train a sampler for a material and write its blob.
     Fit(Box<fit::FitArgs>),
     /// Measure a blob's sampling quality against a material.
@@ -49,6 +54,8 @@ pub enum CliError {
     Train(fit::CommandError),
     /// A codegen command failed.
     Codegen(codegen::CodegenError),
+    /// A sample or pdf command failed.
+    Blob(blob::BlobCommandError),
 }
 
 impl std::fmt::Display for CliError {
@@ -57,6 +64,7 @@ impl std::fmt::Display for CliError {
             CliError::Material(e) => write!(f, "{e}"),
             CliError::Train(e) => write!(f, "{e}"),
             CliError::Codegen(e) => write!(f, "{e}"),
+            CliError::Blob(e) => write!(f, "{e}"),
         }
     }
 }
@@ -67,6 +75,8 @@ impl std::error::Error for CliError {}
 pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), CliError> {
     match cli.command {
         Command::Material(c) => material::run(c, out).map_err(CliError::Material),
+        Command::Sample(a) => blob::run_sample(a, out).map_err(CliError::Blob),
+        Command::Pdf(a) => blob::run_pdf(a, out).map_err(CliError::Blob),
         Command::Fit(a) => fit::run(*a, out).map_err(CliError::Train),
         Command::Eval(a) => eval::run(a, out).map_err(CliError::Train),
         Command::Demo(a) => demo::run(a, out).map_err(CliError::Train),
