@@ -3,7 +3,7 @@
  *   cargo build --release -p diffbsdf-ffi
  *   gcc -std=c99 -Wall -Wextra -pedantic -I ffi/include ffi/examples/sample.c \
  *       target/release/libdiffbsdf_ffi.a -lm -lpthread -ldl -o sample
- *   ./sample models/<model>.bin
+ *   ./sample models/<model>.dbsdf
  */
 #include "diffbsdf.h"
 
@@ -21,7 +21,7 @@ int main(int argc, char **argv) {
     int i;
 
     if (argc != 2) {
-        fprintf(stderr, "usage: %s MODEL.bin\n", argv[0]);
+        fprintf(stderr, "usage: %s MODEL.dbsdf\n", argv[0]);
         return 2;
     }
     f = fopen(argv[1], "rb");
