@@ -9,8 +9,10 @@ use crate::any_model::{with_model, AnyModel};
 use crate::base::BaseDist;
 use crate::flow::{step_det, step_time};
 use crate::input::{uniform_pair, unit_direction};
+use crate::math::{ln, sqrt};
 use crate::model::Model;
 use crate::net::Jacobian;
+use crate::spec;
 use glam::{Vec2, Vec3};
 
 /// Intermediate quantities of a model's evaluation (import the trait to call them).
@@ -30,6 +32,25 @@ pub trait Diagnostics {
 
     /// The flow point `x0` that `steps` Euler steps carry to `x`, by the exact inverse.
     fn invert_flow(&self, wi: Vec3, x: [f32; 2], steps: u32) -> Option<[f32; 2]>;
+
+    /// How much one f32 rounding can move the PDF of a sample (relative): the larger of
+    /// the density's change over one machine epsilon of `wo` and the base density's change
+    /// over one rounding of the start point `x0`, by finite differences (default steps).
+    /// `pdf` is `pdf(wi, wo)`. See `spec::PDF_ROUNDING_SPAN`.
+    fn pdf_rounding(&self, wi: Vec3, wo: Vec3, pdf: f32, x0: [f32; 2]) -> f32;
+
+    /// Whether `pdf(wi, wo)` (`back`) agrees with the PDF `sampled` with `wo` from start
+    /// point `x0` as the kernel promises: never 0, and within `spec::PDF_CONSISTENCY_TOL`
+    /// relative or, where rounding allows more, `spec::PDF_ROUNDING_SPAN` times
+    /// [`Diagnostics::pdf_rounding`].
+    fn pdf_consistent(&self, wi: Vec3, wo: Vec3, sampled: f32, back: f32, x0: [f32; 2]) -> bool {
+        if !(back > 0.0) {
+            return false;
+        }
+        let rel = (back - sampled).abs() / sampled;
+        rel <= spec::PDF_CONSISTENCY_TOL
+            || rel <= spec::PDF_ROUNDING_SPAN * self.pdf_rounding(wi, wo, back, x0)
+    }
 }
 
 impl<
@@ -86,6 +107,30 @@ impl<
         let c = self.condition(self.incident_frame(unit_direction(wi)?).1);
         self.flow_inverse(&c, x, steps).map(|(x0, _)| x0)
     }
+
+    fn pdf_rounding(&self, wi: Vec3, wo: Vec3, pdf: f32, x0: [f32; 2]) -> f32 {
+        const DW: f32 = 1e-4;
+        const DX: f32 = 1e-5;
+        let ln_pdf = ln(pdf);
+        let mut slope = 0.0f32;
+        for (dx, dy) in [(DW, 0.0), (-DW, 0.0), (0.0, DW), (0.0, -DW)] {
+            let moved = wo + Vec3::new(dx, dy, 0.0);
+            let p = self.pdf(wi, moved * (1.0 / sqrt(moved.length_squared())));
+            if p > 0.0 {
+                slope = slope.max((ln(p) - ln_pdf).abs() / DW);
+            }
+        }
+        let mut base_slope = 0.0f32;
+        if let Some(base) = self.base_distribution(wi) {
+            let at = base.ln_pdf(x0);
+            for (dx, dy) in [(DX, 0.0), (-DX, 0.0), (0.0, DX), (0.0, -DX)] {
+                let moved = base.ln_pdf([x0[0] + dx, x0[1] + dy]);
+                base_slope = base_slope.max((moved - at).abs() / DX);
+            }
+        }
+        let x0_size = 1.0 + x0[0].abs().max(x0[1].abs());
+        (slope * f32::EPSILON).max(base_slope * x0_size * f32::EPSILON)
+    }
 }
 
 impl Diagnostics for AnyModel {
@@ -107,5 +152,9 @@ impl Diagnostics for AnyModel {
 
     fn invert_flow(&self, wi: Vec3, x: [f32; 2], steps: u32) -> Option<[f32; 2]> {
         with_model!(self, m => m.invert_flow(wi, x, steps))
+    }
+
+    fn pdf_rounding(&self, wi: Vec3, wo: Vec3, pdf: f32, x0: [f32; 2]) -> f32 {
+        with_model!(self, m => m.pdf_rounding(wi, wo, pdf, x0))
     }
 }

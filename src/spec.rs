@@ -146,6 +146,20 @@ pub const NEWTON_TOL: f32 = 1e-6;
 /// `x` at about 1e-3 of its size, so [`NEWTON_TOL`] cannot be reached there.
 pub const NEWTON_TOL_F16: f32 = 2e-3;
 
+// ---------------------------------------------------------------------------------------
+// Exactness checks (tests, `fit`, `eval`)
+// ---------------------------------------------------------------------------------------
+
+/// Largest relative difference between `pdf(wi, wo)` and the PDF `sample` reported with
+/// `wo`, where f32 rounding allows it (see [`PDF_ROUNDING_SPAN`]).
+pub const PDF_CONSISTENCY_TOL: f32 = 1e-4;
+/// Where the density changes by more than [`PDF_CONSISTENCY_TOL`] within a few f32
+/// roundings (sharply compressing flows, the far tails of a sharp base), the difference may
+/// reach this many times the density's relative change over one machine epsilon of `wo` or
+/// of the start point `x0` (`Diagnostics::pdf_rounding`): one rounding per Euler step and
+/// the incident-frame rotation.
+pub const PDF_ROUNDING_SPAN: f32 = 32.0;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -270,7 +270,12 @@ fn resize_body(b: &mut Vec<u8>, params: usize, rng: &mut Rng) {
 
 fn mutate(b: &mut Vec<u8>, corpus: &[(String, Vec<u8>)], rng: &mut Rng, log: &mut Vec<String>) {
     let len = b.len();
-    match rng.below(12) {
+    // Length-changing mutations (truncate, extend, splice) are a sixth of the draws.
+    let mut kind = rng.below(15);
+    if kind >= 12 {
+        kind = *rng.pick(&[0, 1, 4]);
+    }
+    match kind {
         0 => {
             let at = if rng.chance(0.5) {
                 rng.below(HEADER_LEN.min(len).max(1))
@@ -373,7 +378,8 @@ fn mutate(b: &mut Vec<u8>, corpus: &[(String, Vec<u8>)], rng: &mut Rng, log: &mu
             }
         }
         9 => {
-            let declared = get_le(b, 24, 4).unwrap_or(0) as usize;
+            // The header's count may already be mutated: stay below 64 Ki weights.
+            let declared = (get_le(b, 24, 4).unwrap_or(0) as usize).min(1 << 16);
             let params = match rng.below(4) {
                 0 => declared.saturating_sub(1 + rng.below(4)),
                 1 => declared + 1 + rng.below(4),
@@ -389,7 +395,7 @@ fn mutate(b: &mut Vec<u8>, corpus: &[(String, Vec<u8>)], rng: &mut Rng, log: &mu
                 let code = *rng.pick(&[0u8, 1, 2, 0xff]);
                 b[11] = code;
                 let declared = get_le(b, 24, 4).unwrap_or(0) as usize;
-                if declared < 100_000 {
+                if declared <= 1 << 16 {
                     resize_body(b, declared, rng);
                 }
                 log.push(format!("precision code {code}, body resized"));
@@ -420,7 +426,8 @@ fn make_input(seed: u64, index: usize, corpus: &[(String, Vec<u8>)]) -> (Vec<u8>
     let (name, start) = rng.pick(corpus);
     let mut b = start.clone();
     let mut log = vec![format!("start {name}")];
-    let n = 1 + rng.below(4);
+    // Mostly one mutation (it reaches deeper checks), up to four stacked.
+    let n = if rng.chance(0.5) { 1 } else { 2 + rng.below(3) };
     for _ in 0..n {
         mutate(&mut b, corpus, &mut rng, &mut log);
     }
@@ -443,6 +450,27 @@ struct Counts {
     loaded_3x32: AtomicUsize,
     loaded_4x32: AtomicUsize,
     calls: AtomicUsize,
+    /// Inputs per outcome (`BlobError` variant or "loaded" / "shape mismatch").
+    outcomes: Mutex<std::collections::BTreeMap<&'static str, usize>>,
+}
+
+fn outcome(r: &Result<AnyModel, BlobError>) -> &'static str {
+    match r {
+        Ok(_) => "loaded",
+        Err(BlobError::BadMagic) => "BadMagic",
+        Err(BlobError::UnsupportedVersion(_)) => "UnsupportedVersion",
+        Err(BlobError::Truncated { .. }) => "Truncated",
+        Err(BlobError::TrailingBytes { .. }) => "TrailingBytes",
+        Err(BlobError::UnknownPrecision(_)) => "UnknownPrecision",
+        Err(BlobError::ChecksumMismatch { .. }) => "ChecksumMismatch",
+        Err(BlobError::UnknownDomain(_)) => "UnknownDomain",
+        Err(BlobError::UnknownActivation(_)) => "UnknownActivation",
+        Err(BlobError::BadHeader(_)) => "BadHeader",
+        Err(BlobError::ParamCountMismatch { .. }) => "ParamCountMismatch",
+        Err(BlobError::NonFiniteWeight { .. }) => "NonFiniteWeight",
+        Err(BlobError::ShapeMismatch) => "ShapeMismatch",
+        Err(_) => "other",
+    }
 }
 
 fn before_checksum(e: &BlobError) -> bool {
@@ -613,6 +641,12 @@ fn check_input(bytes: &[u8], index: usize, seed: u64, counts: &Counts) {
     let r4 = Model4x32::from_blob(bytes);
     let ra = AnyModel::from_blob(bytes);
     counts.inputs.fetch_add(1, Ordering::Relaxed);
+    *counts
+        .outcomes
+        .lock()
+        .unwrap()
+        .entry(outcome(&ra))
+        .or_default() += 1;
     match &parsed {
         Err(e) => {
             assert_eq!(r3.as_ref().err(), Some(e));
@@ -771,6 +805,7 @@ fn mutated_blobs_never_panic_and_loaded_models_stay_finite() {
         counts.loaded_4x32.load(Ordering::Relaxed),
         counts.calls.load(Ordering::Relaxed),
     );
+    println!("fuzz_blob: outcomes {:?}", counts.outcomes.lock().unwrap());
     let failures = failures.into_inner().unwrap();
     assert!(
         failures.is_empty(),

@@ -80,7 +80,12 @@ macro_rules! stable {
                         // With fewer steps than trained, a step of a trained model may fold
                         // the plane (not injective): the density formula no longer holds
                         // there, so consistency is asserted for N >= the default only.
-                        if back > 0.0 && steps >= m.default_steps() {
+                        if steps >= m.default_steps() {
+                            assert!(
+                                back > 0.0,
+                                "{}: N={steps} wi {wi:?} u {u:?}: pdf() = 0 for a valid sample",
+                                $label
+                            );
                             checked += 1;
                             let r = rel(back, s.pdf, 0.0);
                             worst = worst.max(r);

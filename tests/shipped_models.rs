@@ -6,19 +6,10 @@ mod support;
 
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::Diagnostics;
+use diffbsdf::spec::{PDF_CONSISTENCY_TOL, PDF_ROUNDING_SPAN};
 use diffbsdf::{AnyModel, Domain, IncidentRange, Model3x32};
 use std::path::PathBuf;
 use support::{direction, rel, Rng};
-
-/// Allowed relative difference between `pdf(wi, wo)` and the sampled PDF.
-const PDF_TOL: f32 = 1e-4;
-
-/// Where the density itself changes by more than [`PDF_TOL`] within a few f32 roundings of
-/// `wo` (a sharply compressing flow), no f32 computation can locate it better: there the
-/// difference may reach `ROUNDING_SPAN` times the density's relative change over one
-/// machine epsilon of `wo` (`kappa`, measured by finite differences), which covers one
-/// rounding per Euler step and the incident-frame rotation. `docs/math.md`, "Exact inverse".
-const ROUNDING_SPAN: f32 = 32.0;
 
 /// Valid samples per model and precision; `DIFFBSDF_CONSISTENCY_SAMPLES` raises it (the
 /// README's full check uses 1 000 000).
@@ -77,29 +68,6 @@ fn uniform_pair(rng: &mut Rng, k: usize) -> Vec2 {
     Vec2::new(a, b)
 }
 
-/// How much one f32 rounding can move the PDF (relative): the larger of the density's
-/// change over one machine epsilon of `wo` and of the base density's change over one
-/// rounding of the start point `x0` (finite differences). Sharp lobes at grazing
-/// incidence and the far tails of a sharp base make these large.
-fn kappa(m: &AnyModel, wi: Vec3, wo: Vec3, pdf: f32, x0: [f32; 2]) -> f32 {
-    let mut slope = 0.0f32;
-    for (dx, dy) in [(1e-4f32, 0.0f32), (-1e-4, 0.0), (0.0, 1e-4), (0.0, -1e-4)] {
-        let p = m.pdf(wi, (wo + Vec3::new(dx, dy, 0.0)).normalize());
-        if p > 0.0 {
-            slope = slope.max((p.ln() - pdf.ln()).abs() / (dx.abs() + dy.abs()));
-        }
-    }
-    let base = m.base_distribution(wi).unwrap();
-    let at = base.ln_pdf(x0);
-    let mut base_slope = 0.0f32;
-    for (dx, dy) in [(1e-5f32, 0.0f32), (-1e-5, 0.0), (0.0, 1e-5), (0.0, -1e-5)] {
-        let moved = base.ln_pdf([x0[0] + dx, x0[1] + dy]);
-        base_slope = base_slope.max((moved - at).abs() / (dx.abs() + dy.abs()));
-    }
-    let x0_size = 1.0 + x0[0].abs().max(x0[1].abs());
-    (slope * f32::EPSILON).max(base_slope * x0_size * f32::EPSILON)
-}
-
 /// What one incident angle gave: valid samples, zero PDFs, samples past PDF_TOL, the
 /// worst relative difference and the worst ratio to the rounding bound.
 #[derive(Default)]
@@ -147,12 +115,12 @@ fn consistency(name: &str, m: &AnyModel, theta: f32, per_theta: usize, seed: u64
         );
         let r = rel(back, s.pdf, 0.0);
         c.worst = c.worst.max(r);
-        if r > PDF_TOL {
+        if r > PDF_CONSISTENCY_TOL {
             c.past_tol += 1;
-            let kappa = kappa(m, wi, s.wo, back, pts[0]);
+            let kappa = m.pdf_rounding(wi, s.wo, back, pts[0]);
             c.worst_over_kappa = c.worst_over_kappa.max(r / kappa);
             assert!(
-                r <= ROUNDING_SPAN * kappa,
+                m.pdf_consistent(wi, s.wo, s.pdf, back, pts[0]),
                 "{name}: wi {wi:?} u {u:?}: sampled {} vs pdf() {back} (rel {r:e}, density change per epsilon of wo {kappa:e})",
                 s.pdf
             );
@@ -193,7 +161,7 @@ fn shipped_models_are_invertible_and_consistent() {
             .map(|c| c.worst_over_kappa)
             .fold(0.0, f32::max);
         println!(
-            "{name}: {} valid, pdf() = 0 on {}, rel > {PDF_TOL:e} on {} (worst {worst:.2e}, at most {over:.1} x the rounding bound)",
+            "{name}: {} valid, pdf() = 0 on {}, rel > {PDF_CONSISTENCY_TOL:e} on {} (worst {worst:.2e}, at most {over:.1} x the rounding bound; allowed {PDF_ROUNDING_SPAN})",
             sum(|c| c.valid),
             sum(|c| c.zero),
             sum(|c| c.past_tol),

@@ -46,8 +46,8 @@ impl ModelExt for AnyModel {
     }
 
     fn min_det(&self, wi: Vec3, u: Vec2) -> Option<f32> {
-        let mut pts = [[0.0f32; 2]; 65];
-        let steps = (self.def().default_steps as u32).min(64);
+        let steps = self.def().default_steps as u32;
+        let mut pts = vec![[0.0f32; 2]; steps as usize + 1];
         self.trajectory(wi, u, steps, &mut pts)
     }
 }

@@ -3,6 +3,7 @@
 //! (up to a small fraction of samples whose Newton inversion fails; printed).
 
 use diffbsdf::glam::{Vec2, Vec3};
+use diffbsdf::internals::Diagnostics;
 use diffbsdf::AnyModel;
 use diffbsdf_train::ModelExt;
 use std::path::Path;
@@ -51,7 +52,9 @@ fn shipped_models_are_exact_and_invertible() {
                         let q = m.pdf(wi, s.wo);
                         assert!(q.is_finite(), "{name}: NaN pdf");
                         n += 1;
-                        if (q - s.pdf).abs() > 1e-3 * s.pdf {
+                        let x0 = m.base_distribution(wi).map(|b| b.sample([u.x, u.y]));
+                        let x0 = x0.unwrap_or([0.0, 0.0]);
+                        if !m.pdf_consistent(wi, s.wo, s.pdf, q, x0) {
                             bad += 1;
                             if bad <= 3 {
                                 eprintln!("{name}: wi theta {theta:.3} phi {phi:.2} u {u:?} wo {:?}: sampled {} inverse {q}", s.wo, s.pdf);
@@ -70,6 +73,6 @@ fn shipped_models_are_exact_and_invertible() {
             min_det > 0.0,
             "{name}: a step is not invertible (det {min_det})"
         );
-        assert!(frac < 0.01, "{name}: {:.3}% of PDFs disagree", 100.0 * frac);
+        assert_eq!(bad, 0, "{name}: {:.3}% of PDFs disagree", 100.0 * frac);
     }
 }

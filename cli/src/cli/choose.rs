@@ -65,7 +65,8 @@ pub fn check(model: &AnyModel, material: &dyn Material, steps: u16, c: &Criteria
     let r = evaluate(&at, material, &cfg);
     let ff = grazing_firefly(&r);
     let rv_ok = c.target_rv.is_none_or(|t| r.learned.rv_mean <= t);
-    let invertible = r.consistency.non_positive_det == 0.0;
+    // Every step invertible, and pdf() exact on every checked sample (never 0).
+    let invertible = r.consistency.non_positive_det == 0.0 && r.consistency.inconsistent == 0;
     Candidate {
         domain: r.domain,
         steps,

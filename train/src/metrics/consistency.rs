@@ -2,8 +2,8 @@
 //! directions, and the smallest step determinant `det(I + h dv/dx)` along trajectories.
 
 use super::sampler::to_glam;
-use crate::ModelExt;
 use diffbsdf::glam::Vec2;
+use diffbsdf::internals::Diagnostics;
 use diffbsdf::AnyModel;
 use diffbsdf_materials::DVec3;
 use rand::Rng;
@@ -21,6 +21,9 @@ pub struct ConsistencySamples {
     pub non_positive: usize,
     /// Trajectories measured.
     pub trajectories: usize,
+    /// Valid samples whose `pdf()` is 0 or disagrees beyond what f32 rounding allows
+    /// (`Diagnostics::pdf_consistent`, the kernel's own exactness check).
+    pub inconsistent: usize,
 }
 
 impl ConsistencySamples {
@@ -30,6 +33,7 @@ impl ConsistencySamples {
         self.min_det = self.min_det.min(o.min_det);
         self.non_positive += o.non_positive;
         self.trajectories += o.trajectories;
+        self.inconsistent += o.inconsistent;
     }
 }
 
@@ -48,6 +52,8 @@ pub struct Consistency {
     pub min_det: f64,
     /// Fraction of trajectories with a non-positive determinant.
     pub non_positive_det: f64,
+    /// Valid samples whose `pdf()` is 0 or disagrees beyond f32 rounding (must be 0).
+    pub inconsistent: usize,
 }
 
 /// `n` samples at `wi`.
@@ -57,9 +63,11 @@ pub fn measure(model: &AnyModel, wi: DVec3, n: usize, rng: &mut Pcg64) -> Consis
         min_det: f64::INFINITY,
         ..Default::default()
     };
+    let steps = model.def().default_steps as u32;
+    let mut points = vec![[0.0f32; 2]; steps as usize + 1];
     for _ in 0..n {
         let u = Vec2::new(rng.gen::<f32>(), rng.gen::<f32>());
-        if let Some(d) = model.min_det(wi, u) {
+        if let Some(d) = model.trajectory(wi, u, steps, &mut points) {
             out.trajectories += 1;
             out.min_det = out.min_det.min(d as f64);
             if !(d > 0.0) {
@@ -67,9 +75,12 @@ pub fn measure(model: &AnyModel, wi: DVec3, n: usize, rng: &mut Pcg64) -> Consis
             }
         }
         if let Some(s) = model.sample(wi, u) {
-            let q = model.pdf(wi, s.wo) as f64;
-            let p = s.pdf as f64;
+            let back = model.pdf(wi, s.wo);
+            let (q, p) = (back as f64, s.pdf as f64);
             out.rel.push((q - p).abs() / p);
+            if !model.pdf_consistent(wi, s.wo, s.pdf, back, points[0]) {
+                out.inconsistent += 1;
+            }
         }
     }
     out
@@ -94,6 +105,7 @@ impl ConsistencySamples {
             above_1e3: self.rel.iter().filter(|r| **r > 1e-3).count() as f64 / n.max(1) as f64,
             min_det: self.min_det,
             non_positive_det: self.non_positive as f64 / self.trajectories.max(1) as f64,
+            inconsistent: self.inconsistent,
         }
     }
 }

@@ -42,11 +42,12 @@ pub fn render(r: &Report) -> String {
     let c = &r.consistency;
     let _ = writeln!(
         s,
-        "PDF consistency |pdf(wo) - pdf_sampled| / pdf_sampled: median {:.2e}  p99 {:.2e}  max {:.2e}  >1e-3: {:.4}%",
+        "PDF consistency |pdf(wo) - pdf_sampled| / pdf_sampled: median {:.2e}  p99 {:.2e}  max {:.2e}  >1e-3: {:.4}%  inexact (pdf() = 0 or beyond f32 rounding): {}",
         c.median,
         c.p99,
         c.max,
-        100.0 * c.above_1e3
+        100.0 * c.above_1e3,
+        c.inconsistent
     );
     let _ = writeln!(
         s,
