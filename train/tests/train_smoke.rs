@@ -90,6 +90,30 @@ fn same_seed_gives_the_same_blob() {
 }
 
 #[test]
+fn thread_count_does_not_change_the_blob() {
+    // Every parallel reduction has a fixed order: one worker thread and three give the
+    // same bytes, on the disk and on the sphere.
+    for (spec, domain) in [
+        ("conductor:ggx,alpha=0.3,metal=Cu", Domain::Disk),
+        ("dielectric:beckmann,alpha=0.3,eta=1.5", Domain::Sphere),
+    ] {
+        let fit_with = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool");
+            pool.install(|| {
+                tiny_fit(spec, domain, 4)
+                    .model
+                    .blob(Precision::F32)
+                    .unwrap()
+            })
+        };
+        assert_eq!(fit_with(1), fit_with(3), "{spec} on {domain:?}");
+    }
+}
+
+#[test]
 fn isotropic_materials_are_fitted_in_the_incident_frame() {
     // Isotropic: the blob says so, and sampling commutes with rotations about the normal.
     let f = tiny_fit("conductor:ggx,alpha=0.3,metal=Cu", Domain::Disk, 3);
