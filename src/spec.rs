@@ -45,6 +45,13 @@ pub const MAX_FREQS: u8 = 16;
 /// `steps = DEFAULT_STEPS` in a call means the model's own default step count, in every
 /// language (Rust, the C ABI, the generated C, GLSL and WGSL).
 pub const DEFAULT_STEPS: u32 = 0;
+/// What a sampling call returns in C (the C ABI and the generated C header alike) when it
+/// produced a sample.
+pub const STATUS_OK: i32 = 0;
+/// What a sampling call returns in C when it produced no sample (invalid input, or the
+/// sample left the domain); its outputs are then zero.
+pub const STATUS_NO_SAMPLE: i32 = 1;
+
 /// Most Euler steps a call may ask for, and a blob may declare as its default: bounds the
 /// work of one call (a larger count gives an invalid result, a blob declaring one is
 /// rejected). Trained models use 1 to 16.

@@ -9,10 +9,10 @@ use diffbsdf::BlobError;
 #[allow(non_camel_case_types)]
 pub enum diffbsdf_status {
     /// Success.
-    DIFFBSDF_OK = 0,
+    DIFFBSDF_OK = diffbsdf::spec::STATUS_OK,
     /// The inputs were not valid (non-unit `wi`, `u` outside [0, 1], ...) or the sample
     /// left the domain; the outputs are zero.
-    DIFFBSDF_NO_SAMPLE = 1,
+    DIFFBSDF_NO_SAMPLE = diffbsdf::spec::STATUS_NO_SAMPLE,
     /// A required pointer was null.
     DIFFBSDF_ERR_NULL = -1,
     /// A pointer was not aligned for its type.

@@ -8,6 +8,7 @@ use crate::desc::ModelDesc;
 use crate::dialect::{Dialect, Math, T};
 use crate::emit::Emitter;
 use crate::{float_repr, header_lines, prefix_for, Options, Weights};
+use diffbsdf::spec;
 
 struct C {
     prefix: String,
@@ -140,6 +141,9 @@ pub(crate) fn write(model: &ModelDesc, options: &Options) -> String {
         "#define {up}_DEFAULT_STEPS {}u",
         model.def.default_steps
     ));
+    c.line("/* What sample() and sample_direction() return, as in the diffbsdf C ABI. */");
+    c.line(format!("#define {up}_OK {}", spec::STATUS_OK));
+    c.line(format!("#define {up}_NO_SAMPLE {}", spec::STATUS_NO_SAMPLE));
     c.blank();
     if !d.buffer {
         let n = model.params.len();
@@ -163,7 +167,9 @@ pub(crate) fn write(model: &ModelDesc, options: &Options) -> String {
     let ep = options.entry_points;
     if ep.direction {
         c.line("/* A direction for wi (unit) and u in [0, 1]^2 into wo, without its PDF.");
-        c.line(" * Returns 1, or 0 with wo = 0 when invalid. */");
+        c.line(format!(
+            " * Returns {up}_OK, or {up}_NO_SAMPLE with wo = 0 when invalid. */"
+        ));
         c.open(format!(
             "static inline int {prefix}_sample_direction({wp}const float wi[3], const float u[2], unsigned steps, float wo[3]) {{"
         ));
@@ -173,12 +179,14 @@ pub(crate) fn write(model: &ModelDesc, options: &Options) -> String {
         c.line("wo[0] = r.x;");
         c.line("wo[1] = r.y;");
         c.line("wo[2] = r.z;");
-        c.line("return r.pdf > 0.0f;");
+        c.line(format!("return r.pdf > 0.0f ? {up}_OK : {up}_NO_SAMPLE;"));
         c.close("}");
         c.blank();
     }
     if ep.sample {
-        c.line("/* A direction and its PDF per unit solid angle. Returns 1, or 0 with zeros. */");
+        c.line(format!(
+            "/* A direction and its PDF per unit solid angle. Returns {up}_OK, or {up}_NO_SAMPLE with zeros. */"
+        ));
         c.open(format!(
             "static inline int {prefix}_sample({wp}const float wi[3], const float u[2], unsigned steps, float wo[3], float *pdf) {{"
         ));
@@ -189,7 +197,7 @@ pub(crate) fn write(model: &ModelDesc, options: &Options) -> String {
         c.line("wo[1] = r.y;");
         c.line("wo[2] = r.z;");
         c.line("*pdf = r.pdf;");
-        c.line("return r.pdf > 0.0f;");
+        c.line(format!("return r.pdf > 0.0f ? {up}_OK : {up}_NO_SAMPLE;"));
         c.close("}");
         c.blank();
     }

@@ -67,8 +67,8 @@ int main(int argc, char **argv) {
     for (i = 0; i < ns; i++) {
         const float *wi = sv + 5 * i, *u = wi + 3;
         float *o = out + 9 * i;
-        o[0] = (float)dbsdf_sample_direction(ARGS wi, u, steps, o + 1);
-        o[4] = (float)dbsdf_sample(ARGS wi, u, steps, o + 5, o + 8);
+        o[0] = (float)(dbsdf_sample_direction(ARGS wi, u, steps, o + 1) == DBSDF_OK);
+        o[4] = (float)(dbsdf_sample(ARGS wi, u, steps, o + 5, o + 8) == DBSDF_OK);
     }
     for (i = 0; i < np; i++) {
         out[9 * ns + i] = dbsdf_pdf(ARGS pv + 6 * i, pv + 6 * i + 3, steps);

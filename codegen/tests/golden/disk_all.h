@@ -17,6 +17,9 @@
 
 #define DIFFBSDF_TINY_DISK_PARAM_COUNT 152u
 #define DIFFBSDF_TINY_DISK_DEFAULT_STEPS 2u
+/* What sample() and sample_direction() return, as in the diffbsdf C ABI. */
+#define DIFFBSDF_TINY_DISK_OK 0
+#define DIFFBSDF_TINY_DISK_NO_SAMPLE 1
 
 /* Every parameter in blob order. */
 static const float DIFFBSDF_TINY_DISK_PARAMS[152] = {
@@ -622,23 +625,23 @@ static inline float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, fl
 }
 
 /* A direction for wi (unit) and u in [0, 1]^2 into wo, without its PDF.
- * Returns 1, or 0 with wo = 0 when invalid. */
+ * Returns DIFFBSDF_TINY_DISK_OK, or DIFFBSDF_TINY_DISK_NO_SAMPLE with wo = 0 when invalid. */
 static inline int diffbsdf_tiny_disk_sample_direction(const float wi[3], const float u[2], unsigned steps, float wo[3]) {
     diffbsdf_tiny_disk_Result r = diffbsdf_tiny_disk_direction_impl(wi[0], wi[1], wi[2], u[0], u[1], steps);
     wo[0] = r.x;
     wo[1] = r.y;
     wo[2] = r.z;
-    return r.pdf > 0.0f;
+    return r.pdf > 0.0f ? DIFFBSDF_TINY_DISK_OK : DIFFBSDF_TINY_DISK_NO_SAMPLE;
 }
 
-/* A direction and its PDF per unit solid angle. Returns 1, or 0 with zeros. */
+/* A direction and its PDF per unit solid angle. Returns DIFFBSDF_TINY_DISK_OK, or DIFFBSDF_TINY_DISK_NO_SAMPLE with zeros. */
 static inline int diffbsdf_tiny_disk_sample(const float wi[3], const float u[2], unsigned steps, float wo[3], float *pdf) {
     diffbsdf_tiny_disk_Result r = diffbsdf_tiny_disk_sample_impl(wi[0], wi[1], wi[2], u[0], u[1], steps);
     wo[0] = r.x;
     wo[1] = r.y;
     wo[2] = r.z;
     *pdf = r.pdf;
-    return r.pdf > 0.0f;
+    return r.pdf > 0.0f ? DIFFBSDF_TINY_DISK_OK : DIFFBSDF_TINY_DISK_NO_SAMPLE;
 }
 
 /* The PDF with which sample() produces wo for wi; 0 when invalid. */

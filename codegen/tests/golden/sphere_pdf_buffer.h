@@ -17,6 +17,9 @@
 
 #define DIFFBSDF_TINY_SPHERE_PARAM_COUNT 156u
 #define DIFFBSDF_TINY_SPHERE_DEFAULT_STEPS 2u
+/* What sample() and sample_direction() return, as in the diffbsdf C ABI. */
+#define DIFFBSDF_TINY_SPHERE_OK 0
+#define DIFFBSDF_TINY_SPHERE_NO_SAMPLE 1
 
 /* The NeRF encoding of wi (f32). */
 typedef struct diffbsdf_tiny_sphere_Enc {
