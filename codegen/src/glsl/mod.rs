@@ -46,10 +46,14 @@ impl Dialect for Glsl {
         }
     }
     fn decl(&self, t: &T, name: &str, init: Option<&str>) -> String {
+        // `precise`: a driver may not fuse or reorder the arithmetic that computes a float
+        // variable, so every GPU evaluates the kernel's unfused operation order (the same
+        // order the kernel, the C ABI and the generated C use).
+        let q = if precise(t) { "precise " } else { "" };
         match (t, init) {
-            (T::Arr(e, n), _) => format!("{} {name}[{n}];", self.ty(e)),
-            (_, Some(i)) => format!("{} {name} = {i};", self.ty(t)),
-            (_, None) => format!("{} {name};", self.ty(t)),
+            (T::Arr(e, n), _) => format!("{q}{} {name}[{n}];", self.ty(e)),
+            (_, Some(i)) => format!("{q}{} {name} = {i};", self.ty(t)),
+            (_, None) => format!("{q}{} {name};", self.ty(t)),
         }
     }
     fn param(&self, t: &T, name: &str) -> String {
@@ -225,4 +229,13 @@ pub(crate) fn write(model: &ModelDesc, options: &Options) -> String {
     c.line(format!("#endif // {guard}"));
     out.push_str(&c.finish());
     out
+}
+
+/// Whether a variable of type `t` holds floats (directly, in an array or in a struct).
+fn precise(t: &T) -> bool {
+    match t {
+        T::F | T::N | T::Struct(_) => true,
+        T::Arr(e, _) => precise(e),
+        T::U | T::B => false,
+    }
 }

@@ -106,13 +106,13 @@ float diffbsdf_tiny_disk_sigmoid(float z) {
 // [wi, sin(pi wi), cos(pi wi), sin(2 pi wi), cos(2 pi wi), ...]: higher
 // frequencies by the double-angle formulas, as the kernel and the trainer do.
 diffbsdf_tiny_disk_Enc diffbsdf_tiny_disk_encode(float w0, float w1, float w2) {
-    diffbsdf_tiny_disk_Enc r;
-    float s0 = sin(3.1415927 * w0);
-    float c0 = cos(3.1415927 * w0);
-    float s1 = sin(3.1415927 * w1);
-    float c1 = cos(3.1415927 * w1);
-    float s2 = sin(3.1415927 * w2);
-    float c2 = cos(3.1415927 * w2);
+    precise diffbsdf_tiny_disk_Enc r;
+    precise float s0 = sin(3.1415927 * w0);
+    precise float c0 = cos(3.1415927 * w0);
+    precise float s1 = sin(3.1415927 * w1);
+    precise float c1 = cos(3.1415927 * w1);
+    precise float s2 = sin(3.1415927 * w2);
+    precise float c2 = cos(3.1415927 * w2);
     r.e[0] = w0;
     r.e[1] = w1;
     r.e[2] = w2;
@@ -124,13 +124,13 @@ diffbsdf_tiny_disk_Enc diffbsdf_tiny_disk_encode(float w0, float w1, float w2) {
         r.e[at + 4u] = c1;
         r.e[at + 2u] = s2;
         r.e[at + 5u] = c2;
-        float t0 = s0;
+        precise float t0 = s0;
         s0 = 2.0 * t0 * c0;
         c0 = 1.0 - 2.0 * t0 * t0;
-        float t1 = s1;
+        precise float t1 = s1;
         s1 = 2.0 * t1 * c1;
         c1 = 1.0 - 2.0 * t1 * t1;
-        float t2 = s2;
+        precise float t2 = s2;
         s2 = 2.0 * t2 * c2;
         c2 = 1.0 - 2.0 * t2 * t2;
     }
@@ -139,20 +139,20 @@ diffbsdf_tiny_disk_Enc diffbsdf_tiny_disk_encode(float w0, float w1, float w2) {
 
 // The base net (parameters of p0) and the velocity net's wi part: once per call.
 diffbsdf_tiny_disk_Cond diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_Enc enc) {
-    diffbsdf_tiny_disk_Cond r;
+    precise diffbsdf_tiny_disk_Cond r;
     // 9 -> 3: weights at 0, biases at 27
-    float h0[3];
+    precise float h0[3];
     for (uint o = 0u; o < 3u; o++) {
-        float z = DIFFBSDF_TINY_DISK_PARAMS[27u + o];
+        precise float z = DIFFBSDF_TINY_DISK_PARAMS[27u + o];
         for (uint i = 0u; i < 9u; i++) {
             z = z + DIFFBSDF_TINY_DISK_PARAMS[0u + o * 9u + i] * enc.e[i];
         }
         h0[o] = z * diffbsdf_tiny_disk_sigmoid(z);
     }
     // readout 3 -> 4: weights at 30, biases at 42
-    float outv[4];
+    precise float outv[4];
     for (uint o = 0u; o < 4u; o++) {
-        float z = DIFFBSDF_TINY_DISK_PARAMS[42u + o];
+        precise float z = DIFFBSDF_TINY_DISK_PARAMS[42u + o];
         for (uint i = 0u; i < 3u; i++) {
             z = z + DIFFBSDF_TINY_DISK_PARAMS[30u + o * 3u + i] * h0[i];
         }
@@ -164,7 +164,7 @@ diffbsdf_tiny_disk_Cond diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_Enc enc)
     r.p3 = clamp(outv[3], -9.21034, 2.3025851);
     // velocity layer 1, wi columns 3.. and bias: weights at 46, biases at 118
     for (uint o = 0u; o < 4u; o++) {
-        float z = DIFFBSDF_TINY_DISK_PARAMS[118u + o];
+        precise float z = DIFFBSDF_TINY_DISK_PARAMS[118u + o];
         for (uint i = 0u; i < 15u; i++) {
             z = z + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 3u + i] * enc.e[i];
         }
@@ -175,33 +175,33 @@ diffbsdf_tiny_disk_Cond diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_Enc enc)
 
 // v(x, t, wi) at the flow point (a, b), without its Jacobian.
 diffbsdf_tiny_disk_Vec2 diffbsdf_tiny_disk_velocity(diffbsdf_tiny_disk_Cond cond, float t, float a, float b) {
-    float f0 = a;
-    float f1 = b;
-    float tn = t;
-    float h0[4];
+    precise float f0 = a;
+    precise float f1 = b;
+    precise float tn = t;
+    precise float h0[4];
     for (uint o = 0u; o < 4u; o++) {
-        float z = cond.c[o] + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 2u] * tn;
+        precise float z = cond.c[o] + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 2u] * tn;
         z = z + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 0u] * f0;
         z = z + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 1u] * f1;
         h0[o] = z * diffbsdf_tiny_disk_sigmoid(z);
     }
     // 4 -> 4: weights at 122, biases at 138
-    float h1[4];
+    precise float h1[4];
     for (uint o = 0u; o < 4u; o++) {
-        float z = DIFFBSDF_TINY_DISK_PARAMS[138u + o];
+        precise float z = DIFFBSDF_TINY_DISK_PARAMS[138u + o];
         for (uint i = 0u; i < 4u; i++) {
             z = z + DIFFBSDF_TINY_DISK_PARAMS[122u + o * 4u + i] * h0[i];
         }
         h1[o] = z * diffbsdf_tiny_disk_sigmoid(z);
     }
     // readout 4 -> 2: weights at 142, biases at 150
-    float v0 = DIFFBSDF_TINY_DISK_PARAMS[150u];
-    float v1 = DIFFBSDF_TINY_DISK_PARAMS[151u];
+    precise float v0 = DIFFBSDF_TINY_DISK_PARAMS[150u];
+    precise float v1 = DIFFBSDF_TINY_DISK_PARAMS[151u];
     for (uint i = 0u; i < 4u; i++) {
         v0 = v0 + DIFFBSDF_TINY_DISK_PARAMS[142u + i] * h1[i];
         v1 = v1 + DIFFBSDF_TINY_DISK_PARAMS[146u + i] * h1[i];
     }
-    diffbsdf_tiny_disk_Vec2 r;
+    precise diffbsdf_tiny_disk_Vec2 r;
     r.x = v0;
     r.y = v1;
     return r;
@@ -210,54 +210,54 @@ diffbsdf_tiny_disk_Vec2 diffbsdf_tiny_disk_velocity(diffbsdf_tiny_disk_Cond cond
 // v and dv/dx by forward-mode differentiation: tangents da (along a) and db
 // (along b) go through every layer, scaled by silu'(z) = s (1 + z (1 - s)).
 diffbsdf_tiny_disk_Jac diffbsdf_tiny_disk_velocity_jacobian(diffbsdf_tiny_disk_Cond cond, float t, float a, float b) {
-    float f0 = a;
-    float f1 = b;
-    float tn = t;
-    float h0[4];
-    float da0[4];
-    float db0[4];
+    precise float f0 = a;
+    precise float f1 = b;
+    precise float tn = t;
+    precise float h0[4];
+    precise float da0[4];
+    precise float db0[4];
     for (uint o = 0u; o < 4u; o++) {
-        float z = cond.c[o] + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 2u] * tn;
+        precise float z = cond.c[o] + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 2u] * tn;
         z = z + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 0u] * f0;
         z = z + DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 1u] * f1;
-        float ta = DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 0u];
-        float tb = DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 1u];
-        float s = diffbsdf_tiny_disk_sigmoid(z);
-        float g = s * (1.0 + z * (1.0 - s));
+        precise float ta = DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 0u];
+        precise float tb = DIFFBSDF_TINY_DISK_PARAMS[46u + o * 18u + 1u];
+        precise float s = diffbsdf_tiny_disk_sigmoid(z);
+        precise float g = s * (1.0 + z * (1.0 - s));
         h0[o] = z * s;
         da0[o] = ta * g;
         db0[o] = tb * g;
     }
     // 4 -> 4: weights at 122, biases at 138
-    float h1[4];
-    float da1[4];
-    float db1[4];
+    precise float h1[4];
+    precise float da1[4];
+    precise float db1[4];
     for (uint o = 0u; o < 4u; o++) {
-        float z = DIFFBSDF_TINY_DISK_PARAMS[138u + o];
-        float ta = 0.0;
-        float tb = 0.0;
+        precise float z = DIFFBSDF_TINY_DISK_PARAMS[138u + o];
+        precise float ta = 0.0;
+        precise float tb = 0.0;
         for (uint i = 0u; i < 4u; i++) {
-            float w = DIFFBSDF_TINY_DISK_PARAMS[122u + o * 4u + i];
+            precise float w = DIFFBSDF_TINY_DISK_PARAMS[122u + o * 4u + i];
             z = z + w * h0[i];
             ta = ta + w * da0[i];
             tb = tb + w * db0[i];
         }
-        float s = diffbsdf_tiny_disk_sigmoid(z);
-        float g = s * (1.0 + z * (1.0 - s));
+        precise float s = diffbsdf_tiny_disk_sigmoid(z);
+        precise float g = s * (1.0 + z * (1.0 - s));
         h1[o] = z * s;
         da1[o] = ta * g;
         db1[o] = tb * g;
     }
     // readout 4 -> 2: weights at 142, biases at 150
-    float v0 = DIFFBSDF_TINY_DISK_PARAMS[150u];
-    float v1 = DIFFBSDF_TINY_DISK_PARAMS[151u];
-    float j00 = 0.0;
-    float j01 = 0.0;
-    float j10 = 0.0;
-    float j11 = 0.0;
+    precise float v0 = DIFFBSDF_TINY_DISK_PARAMS[150u];
+    precise float v1 = DIFFBSDF_TINY_DISK_PARAMS[151u];
+    precise float j00 = 0.0;
+    precise float j01 = 0.0;
+    precise float j10 = 0.0;
+    precise float j11 = 0.0;
     for (uint i = 0u; i < 4u; i++) {
-        float w0 = DIFFBSDF_TINY_DISK_PARAMS[142u + i];
-        float w1 = DIFFBSDF_TINY_DISK_PARAMS[146u + i];
+        precise float w0 = DIFFBSDF_TINY_DISK_PARAMS[142u + i];
+        precise float w1 = DIFFBSDF_TINY_DISK_PARAMS[146u + i];
         v0 = v0 + w0 * h1[i];
         v1 = v1 + w1 * h1[i];
         j00 = j00 + w0 * da1[i];
@@ -265,7 +265,7 @@ diffbsdf_tiny_disk_Jac diffbsdf_tiny_disk_velocity_jacobian(diffbsdf_tiny_disk_C
         j10 = j10 + w1 * da1[i];
         j11 = j11 + w1 * db1[i];
     }
-    diffbsdf_tiny_disk_Jac r;
+    precise diffbsdf_tiny_disk_Jac r;
     r.v0 = v0;
     r.v1 = v1;
     r.j00 = j00;
@@ -278,14 +278,14 @@ diffbsdf_tiny_disk_Jac diffbsdf_tiny_disk_velocity_jacobian(diffbsdf_tiny_disk_C
 // The standard normal quantile Phi^-1(u) = sqrt(2) erfinv(2u - 1), by Giles'
 // single-precision erfinv on the tail probability q = min(u, 1 - u).
 float diffbsdf_tiny_disk_quantile(float u) {
-    float q = u;
+    precise float q = u;
     if (u >= 0.5) {
         q = 1.0 - u;
     }
     q = clamp(q, 9.094947e-13, 0.5);
-    float x = 1.0 - 2.0 * q;
-    float w = -log(4.0 * q * (1.0 - q));
-    float p = 0.0;
+    precise float x = 1.0 - 2.0 * q;
+    precise float w = -log(4.0 * q * (1.0 - q));
+    precise float p = 0.0;
     if (w < 5.0) {
         w = w - 2.5;
         p = 2.8102264e-8;
@@ -309,7 +309,7 @@ float diffbsdf_tiny_disk_quantile(float u) {
         p = 1.001674 + p * w;
         p = 2.8329768 + p * w;
     }
-    float z = 1.4142135 * p * x;
+    precise float z = 1.4142135 * p * x;
     if (u < 0.5) {
         return -z;
     }
@@ -318,7 +318,7 @@ float diffbsdf_tiny_disk_quantile(float u) {
 
 // x0 for u: the deterministic map of the base distribution.
 diffbsdf_tiny_disk_Vec2 diffbsdf_tiny_disk_base_sample(diffbsdf_tiny_disk_Cond cond, float u0, float u1) {
-    diffbsdf_tiny_disk_Vec2 r;
+    precise diffbsdf_tiny_disk_Vec2 r;
     r.x = cond.p0 + exp(cond.p2) * diffbsdf_tiny_disk_quantile(u0);
     r.y = cond.p1 + exp(cond.p3) * diffbsdf_tiny_disk_quantile(u1);
     return r;
@@ -326,14 +326,14 @@ diffbsdf_tiny_disk_Vec2 diffbsdf_tiny_disk_base_sample(diffbsdf_tiny_disk_Cond c
 
 // ln p0(x0) in flow coordinates.
 float diffbsdf_tiny_disk_base_ln_pdf(diffbsdf_tiny_disk_Cond cond, float x0, float x1) {
-    float z0 = (x0 - cond.p0) * exp(-cond.p2);
-    float z1 = (x1 - cond.p1) * exp(-cond.p3);
+    precise float z0 = (x0 - cond.p0) * exp(-cond.p2);
+    precise float z1 = (x1 - cond.p1) * exp(-cond.p3);
     return (-0.5 * z0 * z0 + -0.9189385) + (-0.5 * z1 * z1 + -0.9189385) - cond.p2 - cond.p3;
 }
 
 // The invalid result: wo = 0, pdf = 0.
 diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_none() {
-    diffbsdf_tiny_disk_Result r;
+    precise diffbsdf_tiny_disk_Result r;
     r.x = 0.0;
     r.y = 0.0;
     r.z = 0.0;
@@ -343,10 +343,10 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_none() {
 
 // w normalised if finite and | |w|^2 - 1 | <= 0.001, else ok = false.
 diffbsdf_tiny_disk_Unit diffbsdf_tiny_disk_unit(float x, float y, float z) {
-    diffbsdf_tiny_disk_Unit r;
-    float l2 = x * x + y * y + z * z;
+    precise diffbsdf_tiny_disk_Unit r;
+    precise float l2 = x * x + y * y + z * z;
     r.ok = ((floatBitsToUint(l2) & 0x7f800000u) != 0x7f800000u) && abs(l2 - 1.0) <= 0.001;
-    float s = 1.0 / sqrt(l2);
+    precise float s = 1.0 / sqrt(l2);
     r.x = x * s;
     r.y = y * s;
     r.z = z * s;
@@ -356,12 +356,12 @@ diffbsdf_tiny_disk_Unit diffbsdf_tiny_disk_unit(float x, float y, float z) {
 // Isotropic model: the rotation about the normal that turns wi into the xz-plane
 // (phi_i = 0); samples are turned back by it. The identity at normal incidence.
 diffbsdf_tiny_disk_Frame diffbsdf_tiny_disk_frame(float x, float y) {
-    diffbsdf_tiny_disk_Frame f;
+    precise diffbsdf_tiny_disk_Frame f;
     f.c = 1.0;
     f.s = 0.0;
-    float rho = sqrt(x * x + y * y);
+    precise float rho = sqrt(x * x + y * y);
     if (rho > 1e-12) {
-        float inv = 1.0 / rho;
+        precise float inv = 1.0 / rho;
         f.c = x * inv;
         f.s = y * inv;
     }
@@ -370,12 +370,12 @@ diffbsdf_tiny_disk_Frame diffbsdf_tiny_disk_frame(float x, float y) {
 
 // The direction of flow point (a, b) with pdf = 1, or none() outside the domain.
 diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_to_direction(float a, float b) {
-    diffbsdf_tiny_disk_Result r;
-    float r2 = a * a + b * b;
+    precise diffbsdf_tiny_disk_Result r;
+    precise float r2 = a * a + b * b;
     if (!(((floatBitsToUint(r2) & 0x7f800000u) != 0x7f800000u) && r2 < 1.0)) {
         return diffbsdf_tiny_disk_none();
     }
-    float z = sqrt(1.0 - r2);
+    precise float z = sqrt(1.0 - r2);
     if (!(z > 0.0)) {
         return diffbsdf_tiny_disk_none();
     }
@@ -388,7 +388,7 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_to_direction(float a, float b) {
 
 // x_N by N Euler steps, no Jacobians; pdf = 1 marks a valid direction.
 diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_direction_impl(float wx, float wy, float wz, float u0, float u1, uint steps) {
-    diffbsdf_tiny_disk_Unit wi = diffbsdf_tiny_disk_unit(wx, wy, wz);
+    precise diffbsdf_tiny_disk_Unit wi = diffbsdf_tiny_disk_unit(wx, wy, wz);
     if (!(wi.ok && wi.z >= 0.0 && ((floatBitsToUint(u0) & 0x7f800000u) != 0x7f800000u) && u0 >= 0.0 && u0 <= 1.0 && ((floatBitsToUint(u1) & 0x7f800000u) != 0x7f800000u) && u1 >= 0.0 && u1 <= 1.0)) {
         return diffbsdf_tiny_disk_none();
     }
@@ -399,20 +399,20 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_direction_impl(float wx, float wy, 
     if (n > 256u) {
         return diffbsdf_tiny_disk_none();
     }
-    float h = 1.0 / float(n);
-    diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
-    diffbsdf_tiny_disk_Cond cond = diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
-    diffbsdf_tiny_disk_Vec2 x0 = diffbsdf_tiny_disk_base_sample(cond, u0, u1);
-    float a = x0.x;
-    float b = x0.y;
+    precise float h = 1.0 / float(n);
+    precise diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
+    precise diffbsdf_tiny_disk_Cond cond = diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
+    precise diffbsdf_tiny_disk_Vec2 x0 = diffbsdf_tiny_disk_base_sample(cond, u0, u1);
+    precise float a = x0.x;
+    precise float b = x0.y;
     for (uint k = 0u; k < n; k++) {
-        float t = float(k) * h;
-        diffbsdf_tiny_disk_Vec2 v = diffbsdf_tiny_disk_velocity(cond, t, a, b);
+        precise float t = float(k) * h;
+        precise diffbsdf_tiny_disk_Vec2 v = diffbsdf_tiny_disk_velocity(cond, t, a, b);
         a = a + h * v.x;
         b = b + h * v.y;
     }
-    diffbsdf_tiny_disk_Result r = diffbsdf_tiny_disk_to_direction(a, b);
-    float rx = fr.c * r.x - fr.s * r.y;
+    precise diffbsdf_tiny_disk_Result r = diffbsdf_tiny_disk_to_direction(a, b);
+    precise float rx = fr.c * r.x - fr.s * r.y;
     r.y = fr.s * r.x + fr.c * r.y;
     r.x = rx;
     return r;
@@ -420,7 +420,7 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_direction_impl(float wx, float wy, 
 
 // x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x).
 diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx, float wy, float wz, float u0, float u1, uint steps) {
-    diffbsdf_tiny_disk_Unit wi = diffbsdf_tiny_disk_unit(wx, wy, wz);
+    precise diffbsdf_tiny_disk_Unit wi = diffbsdf_tiny_disk_unit(wx, wy, wz);
     if (!(wi.ok && wi.z >= 0.0 && ((floatBitsToUint(u0) & 0x7f800000u) != 0x7f800000u) && u0 >= 0.0 && u0 <= 1.0 && ((floatBitsToUint(u1) & 0x7f800000u) != 0x7f800000u) && u1 >= 0.0 && u1 <= 1.0)) {
         return diffbsdf_tiny_disk_none();
     }
@@ -431,17 +431,17 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx, float wy, flo
     if (n > 256u) {
         return diffbsdf_tiny_disk_none();
     }
-    float h = 1.0 / float(n);
-    diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
-    diffbsdf_tiny_disk_Cond cond = diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
-    diffbsdf_tiny_disk_Vec2 x0 = diffbsdf_tiny_disk_base_sample(cond, u0, u1);
-    float a = x0.x;
-    float b = x0.y;
-    float ln_det = 0.0;
+    precise float h = 1.0 / float(n);
+    precise diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
+    precise diffbsdf_tiny_disk_Cond cond = diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
+    precise diffbsdf_tiny_disk_Vec2 x0 = diffbsdf_tiny_disk_base_sample(cond, u0, u1);
+    precise float a = x0.x;
+    precise float b = x0.y;
+    precise float ln_det = 0.0;
     for (uint k = 0u; k < n; k++) {
-        float t = float(k) * h;
-        diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
-        float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
+        precise float t = float(k) * h;
+        precise diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
+        precise float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
         if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {
             return diffbsdf_tiny_disk_none();
         }
@@ -449,13 +449,13 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx, float wy, flo
         a = a + h * j.v0;
         b = b + h * j.v1;
     }
-    diffbsdf_tiny_disk_Result r = diffbsdf_tiny_disk_to_direction(a, b);
+    precise diffbsdf_tiny_disk_Result r = diffbsdf_tiny_disk_to_direction(a, b);
     if (!(r.pdf > 0.0)) {
         return diffbsdf_tiny_disk_none();
     }
-    float ln_pdf = diffbsdf_tiny_disk_base_ln_pdf(cond, x0.x, x0.y) - ln_det + log(r.z);
+    precise float ln_pdf = diffbsdf_tiny_disk_base_ln_pdf(cond, x0.x, x0.y) - ln_det + log(r.z);
     r.pdf = exp(ln_pdf);
-    float rx = fr.c * r.x - fr.s * r.y;
+    precise float rx = fr.c * r.x - fr.s * r.y;
     r.y = fr.s * r.x + fr.c * r.y;
     r.x = rx;
     if (!(((floatBitsToUint(r.x) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.y) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.z) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.pdf) & 0x7f800000u) != 0x7f800000u) && r.pdf > 0.0)) {
@@ -466,8 +466,8 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx, float wy, flo
 
 // x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).
 diffbsdf_tiny_disk_Residual diffbsdf_tiny_disk_residual(diffbsdf_tiny_disk_Cond cond, float t, float h, float ya, float yb, float a, float b) {
-    diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
-    diffbsdf_tiny_disk_Residual r;
+    precise diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
+    precise diffbsdf_tiny_disk_Residual r;
     r.r0 = (a + h * j.v0) - ya;
     r.r1 = (b + h * j.v1) - yb;
     r.j00 = j.j00;
@@ -482,41 +482,41 @@ diffbsdf_tiny_disk_Residual diffbsdf_tiny_disk_residual(diffbsdf_tiny_disk_Cond 
 // fixed-point steps where not; each step backtracks from the same point (full,
 // half, ..., at most 8 halvings) to the first that shrinks the residual.
 diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_disk_Cond cond, float t, float h, float ya, float yb, float xa, float xb) {
-    diffbsdf_tiny_disk_Root x;
+    precise diffbsdf_tiny_disk_Root x;
     x.a = 0.0;
     x.b = 0.0;
     x.det = 0.0;
-    float a = xa;
-    float b = xb;
-    diffbsdf_tiny_disk_Residual at = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, a, b);
+    precise float a = xa;
+    precise float b = xb;
+    precise diffbsdf_tiny_disk_Residual at = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, a, b);
     for (uint it = 0u; it < 32u; it++) {
-        float d0 = at.r0;
-        float d1 = at.r1;
+        precise float d0 = at.r0;
+        precise float d1 = at.r1;
         if (at.det > 0.0) {
             // d = (I + h J)^-1 r by the 2x2 adjugate.
             d0 = ((1.0 + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;
             d1 = ((1.0 + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;
         }
-        float size = max(abs(d0), abs(d1));
+        precise float size = max(abs(d0), abs(d1));
         if (!((floatBitsToUint(size) & 0x7f800000u) != 0x7f800000u)) {
             return x;
         }
-        float scale = 1.0 + max(abs(a), abs(b));
+        precise float scale = 1.0 + max(abs(a), abs(b));
         if (size <= 1e-6 * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it.
             x.a = a - d0;
             x.b = b - d1;
-            diffbsdf_tiny_disk_Residual fin = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, x.a, x.b);
+            precise diffbsdf_tiny_disk_Residual fin = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, x.a, x.b);
             if (fin.det > 0.0) {
                 x.det = fin.det;
             }
             return x;
         }
-        float norm = max(abs(at.r0), abs(at.r1));
-        float lambda = 1.0;
-        float ta = a;
-        float tb = b;
+        precise float norm = max(abs(at.r0), abs(at.r1));
+        precise float lambda = 1.0;
+        precise float ta = a;
+        precise float tb = b;
         for (uint ls = 0u; ls < 9u; ls++) {
             ta = a - lambda * d0;
             tb = b - lambda * d1;
@@ -542,33 +542,33 @@ diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_disk_Cond cond, 
 // The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point
 // iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).
 diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_invert_step(diffbsdf_tiny_disk_Cond cond, float t, float h, float ya, float yb) {
-    diffbsdf_tiny_disk_Vec2 v = diffbsdf_tiny_disk_velocity(cond, t, ya, yb);
-    float a0 = ya - h * v.x;
-    float b0 = yb - h * v.y;
-    diffbsdf_tiny_disk_Root x = diffbsdf_tiny_disk_newton(cond, t, h, ya, yb, a0, b0);
+    precise diffbsdf_tiny_disk_Vec2 v = diffbsdf_tiny_disk_velocity(cond, t, ya, yb);
+    precise float a0 = ya - h * v.x;
+    precise float b0 = yb - h * v.y;
+    precise diffbsdf_tiny_disk_Root x = diffbsdf_tiny_disk_newton(cond, t, h, ya, yb, a0, b0);
     if (x.det > 0.0) {
         return x;
     }
-    diffbsdf_tiny_disk_Vec2 v1 = diffbsdf_tiny_disk_velocity(cond, t, a0, b0);
-    float a1 = ya - h * v1.x;
-    float b1 = yb - h * v1.y;
+    precise diffbsdf_tiny_disk_Vec2 v1 = diffbsdf_tiny_disk_velocity(cond, t, a0, b0);
+    precise float a1 = ya - h * v1.x;
+    precise float b1 = yb - h * v1.y;
     x = diffbsdf_tiny_disk_newton(cond, t, h, ya, yb, a1, b1);
     if (x.det > 0.0) {
         return x;
     }
-    float a2 = ya - 0.5 * h * v.x;
-    float b2 = yb - 0.5 * h * v.y;
+    precise float a2 = ya - 0.5 * h * v.x;
+    precise float b2 = yb - 0.5 * h * v.y;
     return diffbsdf_tiny_disk_newton(cond, t, h, ya, yb, a2, b2);
 }
 
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's
 // method on x + h v(x) = y, starting from y - h v(y).
 float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, float ox, float oy, float oz, uint steps) {
-    diffbsdf_tiny_disk_Unit wo = diffbsdf_tiny_disk_unit(ox, oy, oz);
+    precise diffbsdf_tiny_disk_Unit wo = diffbsdf_tiny_disk_unit(ox, oy, oz);
     if (!wo.ok) {
         return 0.0;
     }
-    diffbsdf_tiny_disk_Unit wi = diffbsdf_tiny_disk_unit(wx, wy, wz);
+    precise diffbsdf_tiny_disk_Unit wi = diffbsdf_tiny_disk_unit(wx, wy, wz);
     if (!(wi.ok && wi.z >= 0.0)) {
         return 0.0;
     }
@@ -579,23 +579,23 @@ float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, float ox, float 
     if (n > 256u) {
         return 0.0;
     }
-    float h = 1.0 / float(n);
-    diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
-    diffbsdf_tiny_disk_Cond cond = diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
-    float lox = fr.c * wo.x + fr.s * wo.y;
-    float loy = fr.c * wo.y - fr.s * wo.x;
+    precise float h = 1.0 / float(n);
+    precise diffbsdf_tiny_disk_Frame fr = diffbsdf_tiny_disk_frame(wi.x, wi.y);
+    precise diffbsdf_tiny_disk_Cond cond = diffbsdf_tiny_disk_condition(diffbsdf_tiny_disk_encode(fr.c * wi.x + fr.s * wi.y, fr.c * wi.y - fr.s * wi.x, wi.z));
+    precise float lox = fr.c * wo.x + fr.s * wo.y;
+    precise float loy = fr.c * wo.y - fr.s * wo.x;
     if (!(wo.z > 0.0)) {
         return 0.0;
     }
-    float ya = lox;
-    float yb = loy;
-    float a = ya;
-    float b = yb;
-    float ln_det = 0.0;
+    precise float ya = lox;
+    precise float yb = loy;
+    precise float a = ya;
+    precise float b = yb;
+    precise float ln_det = 0.0;
     for (uint kk = 0u; kk < n; kk++) {
         uint k = n - 1u - kk;
-        float t = float(k) * h;
-        diffbsdf_tiny_disk_Root x = diffbsdf_tiny_disk_invert_step(cond, t, h, a, b);
+        precise float t = float(k) * h;
+        precise diffbsdf_tiny_disk_Root x = diffbsdf_tiny_disk_invert_step(cond, t, h, a, b);
         if (!(x.det > 0.0)) {
             return 0.0;
         }
@@ -603,7 +603,7 @@ float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, float ox, float 
         b = x.b;
         ln_det = ln_det + log(x.det);
     }
-    float pdf = exp(diffbsdf_tiny_disk_base_ln_pdf(cond, a, b) - ln_det + log(wo.z));
+    precise float pdf = exp(diffbsdf_tiny_disk_base_ln_pdf(cond, a, b) - ln_det + log(wo.z));
     if (!((floatBitsToUint(pdf) & 0x7f800000u) != 0x7f800000u)) {
         return 0.0;
     }

@@ -82,13 +82,13 @@ float16_t diffbsdf_tiny_sphere_sigmoid(float16_t z) {
 // [wi, sin(pi wi), cos(pi wi), sin(2 pi wi), cos(2 pi wi), ...]: higher
 // frequencies by the double-angle formulas, as the kernel and the trainer do.
 diffbsdf_tiny_sphere_Enc diffbsdf_tiny_sphere_encode(float w0, float w1, float w2) {
-    diffbsdf_tiny_sphere_Enc r;
-    float s0 = sin(3.1415927 * w0);
-    float c0 = cos(3.1415927 * w0);
-    float s1 = sin(3.1415927 * w1);
-    float c1 = cos(3.1415927 * w1);
-    float s2 = sin(3.1415927 * w2);
-    float c2 = cos(3.1415927 * w2);
+    precise diffbsdf_tiny_sphere_Enc r;
+    precise float s0 = sin(3.1415927 * w0);
+    precise float c0 = cos(3.1415927 * w0);
+    precise float s1 = sin(3.1415927 * w1);
+    precise float c1 = cos(3.1415927 * w1);
+    precise float s2 = sin(3.1415927 * w2);
+    precise float c2 = cos(3.1415927 * w2);
     r.e[0] = w0;
     r.e[1] = w1;
     r.e[2] = w2;
@@ -100,13 +100,13 @@ diffbsdf_tiny_sphere_Enc diffbsdf_tiny_sphere_encode(float w0, float w1, float w
         r.e[at + 4u] = c1;
         r.e[at + 2u] = s2;
         r.e[at + 5u] = c2;
-        float t0 = s0;
+        precise float t0 = s0;
         s0 = 2.0 * t0 * c0;
         c0 = 1.0 - 2.0 * t0 * t0;
-        float t1 = s1;
+        precise float t1 = s1;
         s1 = 2.0 * t1 * c1;
         c1 = 1.0 - 2.0 * t1 * t1;
-        float t2 = s2;
+        precise float t2 = s2;
         s2 = 2.0 * t2 * c2;
         c2 = 1.0 - 2.0 * t2 * t2;
     }
@@ -115,20 +115,20 @@ diffbsdf_tiny_sphere_Enc diffbsdf_tiny_sphere_encode(float w0, float w1, float w
 
 // The base net (parameters of p0) and the velocity net's wi part: once per call.
 diffbsdf_tiny_sphere_Cond diffbsdf_tiny_sphere_condition(uint base, diffbsdf_tiny_sphere_Enc enc) {
-    diffbsdf_tiny_sphere_Cond r;
+    precise diffbsdf_tiny_sphere_Cond r;
     // 9 -> 3: weights at 0, biases at 27
-    float16_t h0[3];
+    precise float16_t h0[3];
     for (uint o = 0u; o < 3u; o++) {
-        float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 27u + o]);
+        precise float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 27u + o]);
         for (uint i = 0u; i < 9u; i++) {
             z = z + float16_t(diffbsdf_tiny_sphere_params[base + 0u + o * 9u + i]) * float16_t(enc.e[i]);
         }
         h0[o] = z * diffbsdf_tiny_sphere_sigmoid(z);
     }
     // readout 3 -> 4: weights at 30, biases at 42
-    float outv[4];
+    precise float outv[4];
     for (uint o = 0u; o < 4u; o++) {
-        float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 42u + o]);
+        precise float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 42u + o]);
         for (uint i = 0u; i < 3u; i++) {
             z = z + float16_t(diffbsdf_tiny_sphere_params[base + 30u + o * 3u + i]) * h0[i];
         }
@@ -140,7 +140,7 @@ diffbsdf_tiny_sphere_Cond diffbsdf_tiny_sphere_condition(uint base, diffbsdf_tin
     r.p3 = clamp(outv[3], -9.21034, 2.3025851);
     // velocity layer 1, wi columns 4.. and bias: weights at 46, biases at 122
     for (uint o = 0u; o < 4u; o++) {
-        float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 122u + o]);
+        precise float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 122u + o]);
         for (uint i = 0u; i < 15u; i++) {
             z = z + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 4u + i]) * float16_t(enc.e[i]);
         }
@@ -156,35 +156,35 @@ float diffbsdf_tiny_sphere_wrap(float phi) {
 
 // v(x, t, wi) at the flow point (a, b), without its Jacobian.
 diffbsdf_tiny_sphere_Vec2 diffbsdf_tiny_sphere_velocity(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float a, float b) {
-    float16_t f0 = float16_t(a);
-    float16_t f1 = float16_t(sin(b));
-    float16_t f2 = float16_t(cos(b));
-    float16_t tn = float16_t(t);
-    float16_t h0[4];
+    precise float16_t f0 = float16_t(a);
+    precise float16_t f1 = float16_t(sin(b));
+    precise float16_t f2 = float16_t(cos(b));
+    precise float16_t tn = float16_t(t);
+    precise float16_t h0[4];
     for (uint o = 0u; o < 4u; o++) {
-        float16_t z = cond.c[o] + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 3u]) * tn;
+        precise float16_t z = cond.c[o] + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 3u]) * tn;
         z = z + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 0u]) * f0;
         z = z + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 1u]) * f1;
         z = z + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 2u]) * f2;
         h0[o] = z * diffbsdf_tiny_sphere_sigmoid(z);
     }
     // 4 -> 4: weights at 126, biases at 142
-    float16_t h1[4];
+    precise float16_t h1[4];
     for (uint o = 0u; o < 4u; o++) {
-        float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 142u + o]);
+        precise float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 142u + o]);
         for (uint i = 0u; i < 4u; i++) {
             z = z + float16_t(diffbsdf_tiny_sphere_params[base + 126u + o * 4u + i]) * h0[i];
         }
         h1[o] = z * diffbsdf_tiny_sphere_sigmoid(z);
     }
     // readout 4 -> 2: weights at 146, biases at 154
-    float16_t v0 = float16_t(diffbsdf_tiny_sphere_params[base + 154u]);
-    float16_t v1 = float16_t(diffbsdf_tiny_sphere_params[base + 155u]);
+    precise float16_t v0 = float16_t(diffbsdf_tiny_sphere_params[base + 154u]);
+    precise float16_t v1 = float16_t(diffbsdf_tiny_sphere_params[base + 155u]);
     for (uint i = 0u; i < 4u; i++) {
         v0 = v0 + float16_t(diffbsdf_tiny_sphere_params[base + 146u + i]) * h1[i];
         v1 = v1 + float16_t(diffbsdf_tiny_sphere_params[base + 150u + i]) * h1[i];
     }
-    diffbsdf_tiny_sphere_Vec2 r;
+    precise diffbsdf_tiny_sphere_Vec2 r;
     r.x = float(v0);
     r.y = float(v1);
     return r;
@@ -193,56 +193,56 @@ diffbsdf_tiny_sphere_Vec2 diffbsdf_tiny_sphere_velocity(uint base, diffbsdf_tiny
 // v and dv/dx by forward-mode differentiation: tangents da (along a) and db
 // (along b) go through every layer, scaled by silu'(z) = s (1 + z (1 - s)).
 diffbsdf_tiny_sphere_Jac diffbsdf_tiny_sphere_velocity_jacobian(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float a, float b) {
-    float16_t f0 = float16_t(a);
-    float16_t f1 = float16_t(sin(b));
-    float16_t f2 = float16_t(cos(b));
-    float16_t tn = float16_t(t);
-    float16_t h0[4];
-    float16_t da0[4];
-    float16_t db0[4];
+    precise float16_t f0 = float16_t(a);
+    precise float16_t f1 = float16_t(sin(b));
+    precise float16_t f2 = float16_t(cos(b));
+    precise float16_t tn = float16_t(t);
+    precise float16_t h0[4];
+    precise float16_t da0[4];
+    precise float16_t db0[4];
     for (uint o = 0u; o < 4u; o++) {
-        float16_t z = cond.c[o] + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 3u]) * tn;
+        precise float16_t z = cond.c[o] + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 3u]) * tn;
         z = z + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 0u]) * f0;
         z = z + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 1u]) * f1;
         z = z + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 2u]) * f2;
-        float16_t ta = float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 0u]);
-        float16_t tb = float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 1u]) * f2 + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 2u]) * (-f1);
-        float16_t s = diffbsdf_tiny_sphere_sigmoid(z);
-        float16_t g = s * (1.0hf + z * (1.0hf - s));
+        precise float16_t ta = float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 0u]);
+        precise float16_t tb = float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 1u]) * f2 + float16_t(diffbsdf_tiny_sphere_params[base + 46u + o * 19u + 2u]) * (-f1);
+        precise float16_t s = diffbsdf_tiny_sphere_sigmoid(z);
+        precise float16_t g = s * (1.0hf + z * (1.0hf - s));
         h0[o] = z * s;
         da0[o] = ta * g;
         db0[o] = tb * g;
     }
     // 4 -> 4: weights at 126, biases at 142
-    float16_t h1[4];
-    float16_t da1[4];
-    float16_t db1[4];
+    precise float16_t h1[4];
+    precise float16_t da1[4];
+    precise float16_t db1[4];
     for (uint o = 0u; o < 4u; o++) {
-        float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 142u + o]);
-        float16_t ta = 0.0hf;
-        float16_t tb = 0.0hf;
+        precise float16_t z = float16_t(diffbsdf_tiny_sphere_params[base + 142u + o]);
+        precise float16_t ta = 0.0hf;
+        precise float16_t tb = 0.0hf;
         for (uint i = 0u; i < 4u; i++) {
-            float16_t w = float16_t(diffbsdf_tiny_sphere_params[base + 126u + o * 4u + i]);
+            precise float16_t w = float16_t(diffbsdf_tiny_sphere_params[base + 126u + o * 4u + i]);
             z = z + w * h0[i];
             ta = ta + w * da0[i];
             tb = tb + w * db0[i];
         }
-        float16_t s = diffbsdf_tiny_sphere_sigmoid(z);
-        float16_t g = s * (1.0hf + z * (1.0hf - s));
+        precise float16_t s = diffbsdf_tiny_sphere_sigmoid(z);
+        precise float16_t g = s * (1.0hf + z * (1.0hf - s));
         h1[o] = z * s;
         da1[o] = ta * g;
         db1[o] = tb * g;
     }
     // readout 4 -> 2: weights at 146, biases at 154
-    float16_t v0 = float16_t(diffbsdf_tiny_sphere_params[base + 154u]);
-    float16_t v1 = float16_t(diffbsdf_tiny_sphere_params[base + 155u]);
-    float16_t j00 = 0.0hf;
-    float16_t j01 = 0.0hf;
-    float16_t j10 = 0.0hf;
-    float16_t j11 = 0.0hf;
+    precise float16_t v0 = float16_t(diffbsdf_tiny_sphere_params[base + 154u]);
+    precise float16_t v1 = float16_t(diffbsdf_tiny_sphere_params[base + 155u]);
+    precise float16_t j00 = 0.0hf;
+    precise float16_t j01 = 0.0hf;
+    precise float16_t j10 = 0.0hf;
+    precise float16_t j11 = 0.0hf;
     for (uint i = 0u; i < 4u; i++) {
-        float16_t w0 = float16_t(diffbsdf_tiny_sphere_params[base + 146u + i]);
-        float16_t w1 = float16_t(diffbsdf_tiny_sphere_params[base + 150u + i]);
+        precise float16_t w0 = float16_t(diffbsdf_tiny_sphere_params[base + 146u + i]);
+        precise float16_t w1 = float16_t(diffbsdf_tiny_sphere_params[base + 150u + i]);
         v0 = v0 + w0 * h1[i];
         v1 = v1 + w1 * h1[i];
         j00 = j00 + w0 * da1[i];
@@ -250,7 +250,7 @@ diffbsdf_tiny_sphere_Jac diffbsdf_tiny_sphere_velocity_jacobian(uint base, diffb
         j10 = j10 + w1 * da1[i];
         j11 = j11 + w1 * db1[i];
     }
-    diffbsdf_tiny_sphere_Jac r;
+    precise diffbsdf_tiny_sphere_Jac r;
     r.v0 = float(v0);
     r.v1 = float(v1);
     r.j00 = float(j00);
@@ -263,14 +263,14 @@ diffbsdf_tiny_sphere_Jac diffbsdf_tiny_sphere_velocity_jacobian(uint base, diffb
 // The standard normal quantile Phi^-1(u) = sqrt(2) erfinv(2u - 1), by Giles'
 // single-precision erfinv on the tail probability q = min(u, 1 - u).
 float diffbsdf_tiny_sphere_quantile(float u) {
-    float q = u;
+    precise float q = u;
     if (u >= 0.5) {
         q = 1.0 - u;
     }
     q = clamp(q, 9.094947e-13, 0.5);
-    float x = 1.0 - 2.0 * q;
-    float w = -log(4.0 * q * (1.0 - q));
-    float p = 0.0;
+    precise float x = 1.0 - 2.0 * q;
+    precise float w = -log(4.0 * q * (1.0 - q));
+    precise float p = 0.0;
     if (w < 5.0) {
         w = w - 2.5;
         p = 2.8102264e-8;
@@ -294,7 +294,7 @@ float diffbsdf_tiny_sphere_quantile(float u) {
         p = 1.001674 + p * w;
         p = 2.8329768 + p * w;
     }
-    float z = 1.4142135 * p * x;
+    precise float z = 1.4142135 * p * x;
     if (u < 0.5) {
         return -z;
     }
@@ -303,20 +303,20 @@ float diffbsdf_tiny_sphere_quantile(float u) {
 
 // Wrapped Cauchy offset for u: 2 atan2(-tanh(gamma/2) cos(pi u), sin(pi u)).
 float diffbsdf_tiny_sphere_wrapped_cauchy_sample(float u, float gamma) {
-    float a = 3.1415927 * u;
+    precise float a = 3.1415927 * u;
     return 2.0 * atan(-tanh(0.5 * gamma) * cos(a), sin(a));
 }
 
 // ln of the wrapped Cauchy density at offset d, in its cancellation-free form.
 float diffbsdf_tiny_sphere_wrapped_cauchy_ln_pdf(float d, float gamma) {
-    float sh = sinh(0.5 * gamma);
-    float sd = sin(0.5 * d);
+    precise float sh = sinh(0.5 * gamma);
+    precise float sd = sin(0.5 * d);
     return log(sinh(gamma)) - 2.5310242 - log(sh * sh + sd * sd);
 }
 
 // x0 for u: the deterministic map of the base distribution.
 diffbsdf_tiny_sphere_Vec2 diffbsdf_tiny_sphere_base_sample(diffbsdf_tiny_sphere_Cond cond, float u0, float u1) {
-    diffbsdf_tiny_sphere_Vec2 r;
+    precise diffbsdf_tiny_sphere_Vec2 r;
     r.x = cond.p0 + exp(cond.p1) * diffbsdf_tiny_sphere_quantile(u0);
     r.y = cond.p2 + diffbsdf_tiny_sphere_wrapped_cauchy_sample(u1, exp(cond.p3));
     return r;
@@ -324,13 +324,13 @@ diffbsdf_tiny_sphere_Vec2 diffbsdf_tiny_sphere_base_sample(diffbsdf_tiny_sphere_
 
 // ln p0(x0) in flow coordinates.
 float diffbsdf_tiny_sphere_base_ln_pdf(diffbsdf_tiny_sphere_Cond cond, float x0, float x1) {
-    float z = (x0 - cond.p0) * exp(-cond.p1);
+    precise float z = (x0 - cond.p0) * exp(-cond.p1);
     return -0.5 * z * z + -0.9189385 - cond.p1 + diffbsdf_tiny_sphere_wrapped_cauchy_ln_pdf(x1 - cond.p2, exp(cond.p3));
 }
 
 // The invalid result: wo = 0, pdf = 0.
 diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_none() {
-    diffbsdf_tiny_sphere_Result r;
+    precise diffbsdf_tiny_sphere_Result r;
     r.x = 0.0;
     r.y = 0.0;
     r.z = 0.0;
@@ -340,10 +340,10 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_none() {
 
 // w normalised if finite and | |w|^2 - 1 | <= 0.001, else ok = false.
 diffbsdf_tiny_sphere_Unit diffbsdf_tiny_sphere_unit(float x, float y, float z) {
-    diffbsdf_tiny_sphere_Unit r;
-    float l2 = x * x + y * y + z * z;
+    precise diffbsdf_tiny_sphere_Unit r;
+    precise float l2 = x * x + y * y + z * z;
     r.ok = ((floatBitsToUint(l2) & 0x7f800000u) != 0x7f800000u) && abs(l2 - 1.0) <= 0.001;
-    float s = 1.0 / sqrt(l2);
+    precise float s = 1.0 / sqrt(l2);
     r.x = x * s;
     r.y = y * s;
     r.z = z * s;
@@ -352,8 +352,8 @@ diffbsdf_tiny_sphere_Unit diffbsdf_tiny_sphere_unit(float x, float y, float z) {
 
 // The direction of flow point (a, b) with pdf = 1, or none() outside the domain.
 diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_to_direction(float a, float b) {
-    diffbsdf_tiny_sphere_Result r;
-    float st = sin(a);
+    precise diffbsdf_tiny_sphere_Result r;
+    precise float st = sin(a);
     if (!(st > 0.0 && a > 0.0 && a < 3.1415927 && ((floatBitsToUint(b) & 0x7f800000u) != 0x7f800000u))) {
         return diffbsdf_tiny_sphere_none();
     }
@@ -366,7 +366,7 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_to_direction(float a, float b) 
 
 // x_N by N Euler steps, no Jacobians; pdf = 1 marks a valid direction.
 diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_direction_impl(uint base, float wx, float wy, float wz, float u0, float u1, uint steps) {
-    diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
+    precise diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
     if (!(wi.ok && ((floatBitsToUint(u0) & 0x7f800000u) != 0x7f800000u) && u0 >= 0.0 && u0 <= 1.0 && ((floatBitsToUint(u1) & 0x7f800000u) != 0x7f800000u) && u1 >= 0.0 && u1 <= 1.0)) {
         return diffbsdf_tiny_sphere_none();
     }
@@ -377,14 +377,14 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_direction_impl(uint base, float
     if (n > 256u) {
         return diffbsdf_tiny_sphere_none();
     }
-    float h = 1.0 / float(n);
-    diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
-    diffbsdf_tiny_sphere_Vec2 x0 = diffbsdf_tiny_sphere_base_sample(cond, u0, u1);
-    float a = x0.x;
-    float b = diffbsdf_tiny_sphere_wrap(x0.y);
+    precise float h = 1.0 / float(n);
+    precise diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
+    precise diffbsdf_tiny_sphere_Vec2 x0 = diffbsdf_tiny_sphere_base_sample(cond, u0, u1);
+    precise float a = x0.x;
+    precise float b = diffbsdf_tiny_sphere_wrap(x0.y);
     for (uint k = 0u; k < n; k++) {
-        float t = float(k) * h;
-        diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, a, b);
+        precise float t = float(k) * h;
+        precise diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, a, b);
         a = a + h * v.x;
         b = diffbsdf_tiny_sphere_wrap(b + h * v.y);
     }
@@ -393,7 +393,7 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_direction_impl(uint base, float
 
 // x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x).
 diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx, float wy, float wz, float u0, float u1, uint steps) {
-    diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
+    precise diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
     if (!(wi.ok && ((floatBitsToUint(u0) & 0x7f800000u) != 0x7f800000u) && u0 >= 0.0 && u0 <= 1.0 && ((floatBitsToUint(u1) & 0x7f800000u) != 0x7f800000u) && u1 >= 0.0 && u1 <= 1.0)) {
         return diffbsdf_tiny_sphere_none();
     }
@@ -404,16 +404,16 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx
     if (n > 256u) {
         return diffbsdf_tiny_sphere_none();
     }
-    float h = 1.0 / float(n);
-    diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
-    diffbsdf_tiny_sphere_Vec2 x0 = diffbsdf_tiny_sphere_base_sample(cond, u0, u1);
-    float a = x0.x;
-    float b = diffbsdf_tiny_sphere_wrap(x0.y);
-    float ln_det = 0.0;
+    precise float h = 1.0 / float(n);
+    precise diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
+    precise diffbsdf_tiny_sphere_Vec2 x0 = diffbsdf_tiny_sphere_base_sample(cond, u0, u1);
+    precise float a = x0.x;
+    precise float b = diffbsdf_tiny_sphere_wrap(x0.y);
+    precise float ln_det = 0.0;
     for (uint k = 0u; k < n; k++) {
-        float t = float(k) * h;
-        diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
-        float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
+        precise float t = float(k) * h;
+        precise diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
+        precise float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
         if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {
             return diffbsdf_tiny_sphere_none();
         }
@@ -421,11 +421,11 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx
         a = a + h * j.v0;
         b = diffbsdf_tiny_sphere_wrap(b + h * j.v1);
     }
-    diffbsdf_tiny_sphere_Result r = diffbsdf_tiny_sphere_to_direction(a, b);
+    precise diffbsdf_tiny_sphere_Result r = diffbsdf_tiny_sphere_to_direction(a, b);
     if (!(r.pdf > 0.0)) {
         return diffbsdf_tiny_sphere_none();
     }
-    float ln_pdf = diffbsdf_tiny_sphere_base_ln_pdf(cond, x0.x, x0.y) - ln_det + -log(sin(a));
+    precise float ln_pdf = diffbsdf_tiny_sphere_base_ln_pdf(cond, x0.x, x0.y) - ln_det + -log(sin(a));
     r.pdf = exp(ln_pdf);
     if (!(((floatBitsToUint(r.x) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.y) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.z) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.pdf) & 0x7f800000u) != 0x7f800000u) && r.pdf > 0.0)) {
         return diffbsdf_tiny_sphere_none();
@@ -435,8 +435,8 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx
 
 // x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).
 diffbsdf_tiny_sphere_Residual diffbsdf_tiny_sphere_residual(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float a, float b) {
-    diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
-    diffbsdf_tiny_sphere_Residual r;
+    precise diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
+    precise diffbsdf_tiny_sphere_Residual r;
     r.r0 = (a + h * j.v0) - ya;
     r.r1 = diffbsdf_tiny_sphere_wrap(diffbsdf_tiny_sphere_wrap(b + h * j.v1) - yb);
     r.j00 = j.j00;
@@ -451,41 +451,41 @@ diffbsdf_tiny_sphere_Residual diffbsdf_tiny_sphere_residual(uint base, diffbsdf_
 // fixed-point steps where not; each step backtracks from the same point (full,
 // half, ..., at most 8 halvings) to the first that shrinks the residual.
 diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float xa, float xb) {
-    diffbsdf_tiny_sphere_Root x;
+    precise diffbsdf_tiny_sphere_Root x;
     x.a = 0.0;
     x.b = 0.0;
     x.det = 0.0;
-    float a = xa;
-    float b = xb;
-    diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, a, b);
+    precise float a = xa;
+    precise float b = xb;
+    precise diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, a, b);
     for (uint it = 0u; it < 32u; it++) {
-        float d0 = at.r0;
-        float d1 = at.r1;
+        precise float d0 = at.r0;
+        precise float d1 = at.r1;
         if (at.det > 0.0) {
             // d = (I + h J)^-1 r by the 2x2 adjugate.
             d0 = ((1.0 + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;
             d1 = ((1.0 + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;
         }
-        float size = max(abs(d0), abs(d1));
+        precise float size = max(abs(d0), abs(d1));
         if (!((floatBitsToUint(size) & 0x7f800000u) != 0x7f800000u)) {
             return x;
         }
-        float scale = 1.0 + max(abs(a), abs(b));
+        precise float scale = 1.0 + max(abs(a), abs(b));
         if (size <= 0.002 * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it.
             x.a = a - d0;
             x.b = diffbsdf_tiny_sphere_wrap(b - d1);
-            diffbsdf_tiny_sphere_Residual fin = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, x.a, x.b);
+            precise diffbsdf_tiny_sphere_Residual fin = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, x.a, x.b);
             if (fin.det > 0.0) {
                 x.det = fin.det;
             }
             return x;
         }
-        float norm = max(abs(at.r0), abs(at.r1));
-        float lambda = 1.0;
-        float ta = a;
-        float tb = b;
+        precise float norm = max(abs(at.r0), abs(at.r1));
+        precise float lambda = 1.0;
+        precise float ta = a;
+        precise float tb = b;
         for (uint ls = 0u; ls < 9u; ls++) {
             ta = a - lambda * d0;
             tb = diffbsdf_tiny_sphere_wrap(b - lambda * d1);
@@ -511,33 +511,33 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
 // The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point
 // iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).
 diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb) {
-    diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, ya, yb);
-    float a0 = ya - h * v.x;
-    float b0 = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
-    diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a0, b0);
+    precise diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, ya, yb);
+    precise float a0 = ya - h * v.x;
+    precise float b0 = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
+    precise diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a0, b0);
     if (x.det > 0.0) {
         return x;
     }
-    diffbsdf_tiny_sphere_Vec2 v1 = diffbsdf_tiny_sphere_velocity(base, cond, t, a0, b0);
-    float a1 = ya - h * v1.x;
-    float b1 = diffbsdf_tiny_sphere_wrap(yb - h * v1.y);
+    precise diffbsdf_tiny_sphere_Vec2 v1 = diffbsdf_tiny_sphere_velocity(base, cond, t, a0, b0);
+    precise float a1 = ya - h * v1.x;
+    precise float b1 = diffbsdf_tiny_sphere_wrap(yb - h * v1.y);
     x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a1, b1);
     if (x.det > 0.0) {
         return x;
     }
-    float a2 = ya - 0.5 * h * v.x;
-    float b2 = diffbsdf_tiny_sphere_wrap(yb - 0.5 * h * v.y);
+    precise float a2 = ya - 0.5 * h * v.x;
+    precise float b2 = diffbsdf_tiny_sphere_wrap(yb - 0.5 * h * v.y);
     return diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a2, b2);
 }
 
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's
 // method on x + h v(x) = y, starting from y - h v(y).
 float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, float ox, float oy, float oz, uint steps) {
-    diffbsdf_tiny_sphere_Unit wo = diffbsdf_tiny_sphere_unit(ox, oy, oz);
+    precise diffbsdf_tiny_sphere_Unit wo = diffbsdf_tiny_sphere_unit(ox, oy, oz);
     if (!wo.ok) {
         return 0.0;
     }
-    diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
+    precise diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
     if (!(wi.ok)) {
         return 0.0;
     }
@@ -548,21 +548,21 @@ float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, flo
     if (n > 256u) {
         return 0.0;
     }
-    float h = 1.0 / float(n);
-    diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
-    float rho = sqrt(wo.x * wo.x + wo.y * wo.y);
+    precise float h = 1.0 / float(n);
+    precise diffbsdf_tiny_sphere_Cond cond = diffbsdf_tiny_sphere_condition(base, diffbsdf_tiny_sphere_encode(wi.x, wi.y, wi.z));
+    precise float rho = sqrt(wo.x * wo.x + wo.y * wo.y);
     if (!(rho > 0.0)) {
         return 0.0;
     }
-    float ya = atan(rho, wo.z);
-    float yb = atan(wo.y, wo.x);
-    float a = ya;
-    float b = diffbsdf_tiny_sphere_wrap(yb);
-    float ln_det = 0.0;
+    precise float ya = atan(rho, wo.z);
+    precise float yb = atan(wo.y, wo.x);
+    precise float a = ya;
+    precise float b = diffbsdf_tiny_sphere_wrap(yb);
+    precise float ln_det = 0.0;
     for (uint kk = 0u; kk < n; kk++) {
         uint k = n - 1u - kk;
-        float t = float(k) * h;
-        diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_invert_step(base, cond, t, h, a, b);
+        precise float t = float(k) * h;
+        precise diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_invert_step(base, cond, t, h, a, b);
         if (!(x.det > 0.0)) {
             return 0.0;
         }
@@ -570,7 +570,7 @@ float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, flo
         b = x.b;
         ln_det = ln_det + log(x.det);
     }
-    float pdf = exp(diffbsdf_tiny_sphere_base_ln_pdf(cond, a, b) - ln_det + -log(sin(ya)));
+    precise float pdf = exp(diffbsdf_tiny_sphere_base_ln_pdf(cond, a, b) - ln_det + -log(sin(ya)));
     if (!((floatBitsToUint(pdf) & 0x7f800000u) != 0x7f800000u)) {
         return 0.0;
     }
