@@ -45,6 +45,16 @@ objdump -d target/baseline/release/libdiffbsdf_ffi.a | awk '
   END { if (avx) { print "baseline C library: " avx " AVX instructions in diffbsdf code"; exit 1 } }'
 echo "== docs";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p diffbsdf -p diffbsdf-ffi -p diffbsdf-codegen
 echo "== tests";   cargo test --release --workspace
+# The kernel's input-facing tests once more without --release: debug assertions and
+# overflow checks on (profile.test, opt-level 1). The targets that exercise parsing and
+# edge inputs (the blob fuzzer with 2 000 inputs, robustness, hard cases, base
+# distributions, the model definition, the declared incident range); the long numerical
+# suites (normalization 11 min unoptimised, shipped_models, pdf_consistency, isotropy,
+# bijectivity, blob) run in release above. About 80 s measured on 2 busy cores.
+echo "== kernel tests in debug (overflow checks)"
+DIFFBSDF_FUZZ_INPUTS=2000 cargo test -p diffbsdf --lib \
+  --test base_distributions --test fuzz_blob --test hard_cases --test incident_range \
+  --test jacobian --test model_def --test robustness
 
 echo "== python package (numpy API, Mitsuba 3 plugin)"
 # A venv under target/ (gitignored); pip and maturin skip what is already there.

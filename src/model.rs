@@ -68,6 +68,10 @@ impl<
             return Err(BlobError::ShapeMismatch);
         }
         self.def = blob.def;
+        // Columns a disk blob does not store (the third feature) are zero, as in
+        // `from_blob`.
+        self.base = BaseNet::ZERO;
+        self.velocity = VelocityNet::ZERO;
         let mut weights = blob.weights();
         self.visit_params_mut(|p| *p = weights.next().unwrap_or(0.0));
         Ok(())

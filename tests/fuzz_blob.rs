@@ -13,9 +13,9 @@
 //! of `load_into` unchanged; no NaN/Inf output (PDF finite and >= 0, `wo` finite and
 //! unit); invalid arguments give no sample and PDF 0.
 //!
-//! `DIFFBSDF_FUZZ_INPUTS` sets the number of inputs (default 24 000), `DIFFBSDF_FUZZ_SEED`
-//! the seed. Input `i` depends only on the seed and `i`; a failing input is written to
-//! `target/tmp/` and its index printed.
+//! `DIFFBSDF_FUZZ_INPUTS` sets the number of inputs (default 16 000, 15-25 s in release
+//! on 2 cores), `DIFFBSDF_FUZZ_SEED` the seed. Input `i` depends only on the seed and `i`;
+//! a failing input is written to `target/tmp/` and its index printed.
 
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::blob::{blob_len, crc32, write_blob, Blob, CHECKSUM_LEN, HEADER_LEN};
@@ -27,7 +27,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-const DEFAULT_INPUTS: usize = 24_000;
+const DEFAULT_INPUTS: usize = 16_000;
 const DEFAULT_SEED: u64 = 0x00DB_5DF0;
 
 /// SplitMix64: std only, and every input is a function of (seed, index).
@@ -678,10 +678,7 @@ fn check_input(bytes: &[u8], index: usize, seed: u64, counts: &Counts) {
     let (before3, before4) = baselines();
     let mut m3 = *before3;
     match (m3.load_into(bytes), &r3) {
-        (Ok(()), Ok(m)) => assert!(same_model(
-            &AnyModel::Velocity3x32(m3),
-            &AnyModel::Velocity3x32(*m)
-        )),
+        (Ok(()), Ok(m)) => assert!(m3 == *m, "load_into and from_blob differ"),
         (Err(e), Err(f)) => {
             assert_eq!(&e, f);
             assert!(&m3 == before3, "load_into changed the model on {e:?}");
@@ -690,10 +687,7 @@ fn check_input(bytes: &[u8], index: usize, seed: u64, counts: &Counts) {
     }
     let mut m4 = *before4;
     match (m4.load_into(bytes), &r4) {
-        (Ok(()), Ok(m)) => assert!(same_model(
-            &AnyModel::Velocity4x32(m4),
-            &AnyModel::Velocity4x32(*m)
-        )),
+        (Ok(()), Ok(m)) => assert!(m4 == *m, "load_into and from_blob differ"),
         (Err(e), Err(f)) => {
             assert_eq!(&e, f);
             assert!(&m4 == before4, "load_into changed the model on {e:?}");
@@ -708,27 +702,6 @@ fn check_input(bytes: &[u8], index: usize, seed: u64, counts: &Counts) {
         };
         exercise(m, &mut rng, counts);
     }
-}
-
-/// Whether `load_into` gave the model `from_blob` gives: the same definition, the same
-/// parameters bit for bit, and the same sample and PDF at one point.
-///
-/// (Not `==`: a disk blob loaded into a model that held a sphere model keeps the old
-/// values in the first layer's unused third feature column, which `from_blob` leaves zero.
-/// The disk's third feature is 0, so the outputs are the same.)
-fn same_model(a: &AnyModel, b: &AnyModel) -> bool {
-    let params = |m: &AnyModel| {
-        let mut p = vec![0.0f32; m.def().param_count()];
-        m.params(&mut p).unwrap();
-        p.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
-    };
-    let wi = Vec3::new(0.3, 0.0, 0.953_939_2);
-    let u = Vec2::new(0.3, 0.6);
-    let bits = |s: Option<Sample>| s.map(|s| (s.wo.to_array().map(f32::to_bits), s.pdf.to_bits()));
-    a.def() == b.def()
-        && params(a) == params(b)
-        && bits(a.sample(wi, u)) == bits(b.sample(wi, u))
-        && a.pdf(wi, Vec3::Z).to_bits() == b.pdf(wi, Vec3::Z).to_bits()
 }
 
 /// Models that `load_into` starts from (distinct from every corpus blob).
