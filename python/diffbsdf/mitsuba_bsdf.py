@@ -148,6 +148,9 @@ def _make_class() -> type:
             if self.steps is not None and self.steps < 1:
                 raise ValueError(f"diffbsdf: steps must be >= 1, got {self.steps}")
             self.disk = self.model.domain == "disk"
+            # Models declared for wi above the surface only (every disk model, a BRDF on the
+            # sphere) see wi mirrored into the upper hemisphere, as `twosided` does.
+            self.mirror = self.model.incident_range == "upper_hemisphere"
             self.eta = float(props.get("eta")) if "eta" in keys else self._nested_eta()
             self.m_flags = self.nested.flags()
             self.m_components = [self.nested.flags(i) for i in range(self.nested.component_count())]
@@ -177,9 +180,10 @@ def _make_class() -> type:
 
         # -- helpers ---------------------------------------------------------------------
         def _model_side(self, wi: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-            """wi as the model sees it and the per-row z sign to undo (disk: mirror below)."""
+            """wi as the model sees it and the per-row z sign to undo (mirrored below the
+            surface for models declared for the upper hemisphere only)."""
             sign = np.ones(wi.shape[0], dtype=np.float32)
-            if self.disk:
+            if self.mirror:
                 sign = np.where(wi[:, 2] < 0, np.float32(-1), np.float32(1)).astype(np.float32)
                 wi = wi.copy()
                 wi[:, 2] *= sign
