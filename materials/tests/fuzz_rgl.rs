@@ -19,10 +19,12 @@
 //! seed. Input `i` depends only on the seed and `i`; a failing input is written to
 //! `target/tmp/` and its index printed.
 
+#[path = "../../tests/support/fuzz_driver.rs"]
+mod fuzz_driver;
+
 use diffbsdf_materials::rgl::{RglError, RglMaterial, TensorFile};
 use diffbsdf_materials::{DVec3, Material};
 use std::collections::BTreeMap;
-use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -653,54 +655,18 @@ fn check_input(bytes: &[u8], index: usize, seed: u64, counts: &Counts) {
 
 #[test]
 fn mutated_rgl_files_never_panic() {
-    let inputs = std::env::var("DIFFBSDF_FUZZ_INPUTS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(DEFAULT_INPUTS);
-    let seed = std::env::var("DIFFBSDF_FUZZ_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(DEFAULT_SEED);
+    let (inputs, seed) = fuzz_driver::inputs_and_seed(DEFAULT_INPUTS, DEFAULT_SEED);
     let (small, full) = seeds();
     let counts = Counts::default();
-    let failures = Mutex::new(Vec::<String>::new());
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(8);
-    let start = std::time::Instant::now();
-    std::thread::scope(|scope| {
-        for t in 0..threads {
-            let (small, full, counts, failures) = (&small, &full, &counts, &failures);
-            scope.spawn(move || {
-                for index in (t..inputs).step_by(threads) {
-                    if failures.lock().unwrap().len() >= 10 {
-                        return;
-                    }
-                    let (bytes, log) = make_input(seed, index, small, full);
-                    let run = catch_unwind(AssertUnwindSafe(|| {
-                        check_input(&bytes, index, seed, counts)
-                    }));
-                    if let Err(payload) = run {
-                        let msg = payload
-                            .downcast_ref::<String>()
-                            .cloned()
-                            .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
-                            .unwrap_or_default();
-                        let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-                            .join(format!("fuzz_rgl_seed{seed}_input{index}.bsdf"));
-                        let _ = std::fs::write(&path, &bytes);
-                        failures.lock().unwrap().push(format!(
-                            "input {index} (seed {seed}, {} bytes, saved to {}): {msg}\n  mutations: {}",
-                            bytes.len(),
-                            path.display(),
-                            log.join("; ")
-                        ));
-                    }
-                }
-            });
-        }
-    });
-    let secs = start.elapsed().as_secs_f64();
+    let (threads, secs) = fuzz_driver::run(
+        "fuzz_rgl",
+        "bsdf",
+        env!("CARGO_TARGET_TMPDIR"),
+        seed,
+        inputs,
+        |index| make_input(seed, index, &small, &full),
+        |bytes, index| check_input(bytes, index, seed, &counts),
+    );
     let n = counts.inputs.load(Ordering::Relaxed);
     println!(
         "fuzz_rgl: seed {seed}, {n} inputs in {secs:.1} s on {threads} threads ({:.0}/s): {} loaded, {} eval/pdf/sample calls",
@@ -709,13 +675,6 @@ fn mutated_rgl_files_never_panic() {
         counts.calls.load(Ordering::Relaxed),
     );
     println!("fuzz_rgl: outcomes {:?}", counts.outcomes.lock().unwrap());
-    let failures = failures.into_inner().unwrap();
-    assert!(
-        failures.is_empty(),
-        "{} failing inputs:\n{}",
-        failures.len(),
-        failures.join("\n")
-    );
     if inputs >= 1000 {
         assert!(
             counts.loaded.load(Ordering::Relaxed) * 10 > n,
