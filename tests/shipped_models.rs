@@ -234,3 +234,74 @@ fn shipped_models_declare_their_incident_range() {
         }
     }
 }
+
+/// `∫ pdf dω` over the sphere (midpoints of a grid uniform in `z = cos theta` and `phi`, so
+/// every cell has the same solid angle), split over threads by rows.
+fn sphere_integral(m: &AnyModel, wi: Vec3, nz: usize, nphi: usize) -> f64 {
+    let rows: Vec<usize> = (0..nz).collect();
+    let parts: Vec<f64> = std::thread::scope(|scope| {
+        let jobs: Vec<_> = rows
+            .chunks(nz.div_ceil(2))
+            .map(|chunk| {
+                scope.spawn(move || {
+                    let mut sum = 0.0f64;
+                    for &i in chunk {
+                        let z = -1.0 + 2.0 * (i as f32 + 0.5) / nz as f32;
+                        let r = (1.0 - z * z).max(0.0).sqrt();
+                        for j in 0..nphi {
+                            let phi = (j as f32 + 0.5) / nphi as f32 * std::f32::consts::TAU;
+                            let wo = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                            sum += m.pdf(wi, wo) as f64;
+                        }
+                    }
+                    sum
+                })
+            })
+            .collect();
+        jobs.into_iter().map(|j| j.join().unwrap()).collect()
+    });
+    parts.iter().sum::<f64>() * 4.0 * std::f64::consts::PI / (nz * nphi) as f64
+}
+
+/// The share of a stratified `u` grid whose sample is lost (leaves the domain).
+fn lost_share(m: &AnyModel, wi: Vec3, grid: usize) -> f64 {
+    let mut lost = 0usize;
+    for i in 0..grid {
+        for j in 0..grid {
+            let u = Vec2::new(
+                (i as f32 + 0.5) / grid as f32,
+                (j as f32 + 0.5) / grid as f32,
+            );
+            lost += usize::from(m.sample_direction(wi, u).is_none());
+        }
+    }
+    lost as f64 / (grid * grid) as f64
+}
+
+/// Every shipped sphere model's PDF integrates over the sphere to one minus the mass its
+/// samples lose (the density is the true density of what is sampled, nothing renormalised).
+#[test]
+fn shipped_sphere_models_integrate_to_one_minus_lost_mass() {
+    for (name, bytes) in shipped() {
+        let m = AnyModel::from_blob(&bytes).unwrap();
+        if m.def().domain != Domain::Sphere || name.contains(".f16.") {
+            continue;
+        }
+        let mut wis = vec![direction(0.45, 0.6, true)];
+        if m.def().incident == IncidentRange::WholeSphere {
+            wis.push(direction(0.2, 0.3, false));
+        }
+        for wi in wis {
+            let integral = sphere_integral(&m, wi, 360, 720);
+            let lost = lost_share(&m, wi, 500);
+            println!(
+                "{name} wi {wi:?}: integral {integral:.6} + lost {lost:.6} = {:.6}",
+                integral + lost
+            );
+            assert!(
+                (integral + lost - 1.0).abs() <= 2e-3,
+                "{name} wi {wi:?}: {integral} + {lost}"
+            );
+        }
+    }
+}
