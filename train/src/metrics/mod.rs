@@ -1,4 +1,4 @@
-//! Sampling-quality metrics with the DESIGN.md definitions ("Measuring sampling quality"):
+//! Sampling-quality metrics with the definitions of `docs/math.md` ("Metrics"):
 //! per `wi` on a fixed grid, `w = f |cos theta_o| / pdf` (0 for invalid samples); relative
 //! variance, firefly ratio, KL on a quadrature grid, forward/inverse PDF consistency and
 //! step determinants, side by side with the material's own sampler and cosine sampling.
