@@ -125,7 +125,7 @@ pub fn run(args: TradeoffArgs, out: &mut dyn std::io::Write) -> Result<(), Comma
     let points = &record.points;
     std::fs::create_dir_all(&args.out).map_err(|e| CommandError::Io(args.out.clone(), e))?;
     let md = format!(
-        "# What accuracy costs in time\n\nProduced by `{}` ({} samples per `wi` and sampler, {} timed calls per entry point, {} logical cores; metrics as defined in `docs/math.md`, "Metrics"). Plot: [tradeoff.svg](tradeoff.svg) (x: time of a direction + PDF over the material's own sample; y: mean RV; open circles: the material's own sampler at x = 1; f16 curves thin with triangles). PDF slices: [slices/](slices/).\n\n![accuracy vs time](tradeoff.svg)\n\n{}",
+        "# What accuracy costs in time\n\nProduced by `{}` ({} samples per `wi` and sampler, {} timed calls per entry point, {} logical cores; metrics as defined in `docs/math.md`, \"Metrics\"). Plot: [tradeoff.svg](tradeoff.svg) (x: time of a direction + PDF over the material's own sample; y: mean RV; open circles: the material's own sampler at x = 1; f16 curves thin with triangles). PDF slices: [slices/](slices/).\n\n![accuracy vs time](tradeoff.svg)\n\n{}",
         record.command,
         record.samples,
         record.timing_calls,
