@@ -19,13 +19,13 @@
 
 #[path = "support/fuzz_driver.rs"]
 mod fuzz_driver;
+mod support;
 
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::blob::{blob_len, crc32, write_blob, Blob, CHECKSUM_LEN, HEADER_LEN};
 use diffbsdf::{
     spec, AnyModel, BlobError, Domain, Model3x32, Model4x32, ModelDef, ModelName, Precision, Sample,
 };
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -73,24 +73,6 @@ impl Rng {
 // Corpus
 // ---------------------------------------------------------------------------------------
 
-fn shipped() -> Vec<(String, Vec<u8>)> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("models");
-    let mut out: Vec<_> = std::fs::read_dir(&dir)
-        .expect("models/ exists")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "dbsdf"))
-        .map(|p| {
-            (
-                p.file_name().unwrap().to_string_lossy().into_owned(),
-                std::fs::read(&p).unwrap(),
-            )
-        })
-        .collect();
-    out.sort();
-    assert!(out.len() >= 10, "expected the shipped models in {dir:?}");
-    out
-}
-
 /// A valid blob of `def` with random weights of magnitude up to `scale`.
 fn random_blob(def: &ModelDef, rng: &mut Rng, scale: f32) -> Vec<u8> {
     let params: Vec<f32> = (0..def.param_count())
@@ -105,7 +87,7 @@ fn random_blob(def: &ModelDef, rng: &mut Rng, scale: f32) -> Vec<u8> {
 /// The shipped models and small random blobs: both compiled shapes on both domains,
 /// both precisions, isotropic or not, and shapes no compiled type accepts.
 fn corpus() -> Vec<(String, Vec<u8>)> {
-    let mut out = shipped();
+    let mut out = support::shipped_blobs();
     let mut rng = Rng::new(7);
     let mut k = 0;
     for base in [ModelDef::paper_disk(), ModelDef::paper_sphere()] {

@@ -20,24 +20,6 @@ fn samples_per_model() -> usize {
         .unwrap_or(60_000)
 }
 
-fn shipped() -> Vec<(String, Vec<u8>)> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("models");
-    let mut out: Vec<_> = std::fs::read_dir(&dir)
-        .expect("models/ exists")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "dbsdf"))
-        .map(|p| {
-            (
-                p.file_name().unwrap().to_string_lossy().into_owned(),
-                std::fs::read(&p).unwrap(),
-            )
-        })
-        .collect();
-    out.sort();
-    assert!(out.len() >= 10, "expected the shipped models in {dir:?}");
-    out
-}
-
 /// Incident polar angles: normal incidence to grazing; below the surface too for models
 /// declared for them.
 fn incident_thetas(domain: Domain, below: bool) -> Vec<f32> {
@@ -138,7 +120,7 @@ fn consistency(name: &str, m: &AnyModel, theta: f32, per_theta: usize, seed: u64
 #[test]
 fn shipped_models_are_invertible_and_consistent() {
     let per_model = samples_per_model();
-    for (name, bytes) in shipped() {
+    for (name, bytes) in support::shipped_blobs() {
         let m = AnyModel::from_blob(&bytes).unwrap();
         let below = m.def().incident == IncidentRange::WholeSphere;
         let thetas = incident_thetas(m.def().domain, below);
@@ -213,7 +195,7 @@ fn shipped_disk_model_integrates_to_one_minus_lost_mass() {
 /// sphere), and answers nothing outside it.
 #[test]
 fn shipped_models_declare_their_incident_range() {
-    for (name, bytes) in shipped() {
+    for (name, bytes) in support::shipped_blobs() {
         let m = AnyModel::from_blob(&bytes).unwrap();
         let stem = name.trim_end_matches(".dbsdf").trim_end_matches(".f16");
         let report = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -282,7 +264,7 @@ fn lost_share(m: &AnyModel, wi: Vec3, grid: usize) -> f64 {
 /// samples lose (the density is the true density of what is sampled, nothing renormalised).
 #[test]
 fn shipped_sphere_models_integrate_to_one_minus_lost_mass() {
-    for (name, bytes) in shipped() {
+    for (name, bytes) in support::shipped_blobs() {
         let m = AnyModel::from_blob(&bytes).unwrap();
         if m.def().domain != Domain::Sphere || name.contains(".f16.") {
             continue;

@@ -227,3 +227,22 @@ pub fn direction(u0: f32, u1: f32, upper: bool) -> diffbsdf::glam::Vec3 {
 pub fn rel(a: f32, b: f32, floor: f32) -> f32 {
     (a - b).abs() / b.abs().max(floor)
 }
+
+/// Every shipped blob (`models/*.dbsdf`, f32 and f16) with its file name, sorted.
+pub fn shipped_blobs() -> Vec<(String, Vec<u8>)> {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("models");
+    let mut out: Vec<_> = std::fs::read_dir(&dir)
+        .expect("models/ exists")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "dbsdf"))
+        .map(|p| {
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read(&p).unwrap(),
+            )
+        })
+        .collect();
+    out.sort();
+    assert!(out.len() >= 10, "expected the shipped models in {dir:?}");
+    out
+}
