@@ -11,6 +11,10 @@ pub enum Domain {
     Disk,
     /// Spherical coordinates `x = (theta, phi)` over the whole sphere (full BSDFs).
     Sphere,
+    /// Spherical coordinates about the tangent `y` axis: `wo = (sin t cos p, cos t,
+    /// sin t sin p)`, so the normal and the plane of incidence (of an isotropic model) lie
+    /// on the chart's equator, away from its poles (`docs/math.md`, §4.3).
+    Equatorial,
 }
 
 impl Domain {
@@ -20,14 +24,23 @@ impl Domain {
     pub const fn feature_count(self) -> usize {
         match self {
             Domain::Disk => 2,
-            Domain::Sphere => 3,
+            Domain::Sphere | Domain::Equatorial => 3,
         }
+    }
+
+    /// Whether the flow lives in spherical coordinates `(theta, phi)` over the whole
+    /// sphere (the sphere and the equatorial chart): same features, base distribution,
+    /// measure and steps; only the axis of the chart differs.
+    #[must_use]
+    pub const fn is_spherical(self) -> bool {
+        matches!(self, Domain::Sphere | Domain::Equatorial)
     }
 
     pub(crate) const fn code(self) -> u8 {
         match self {
             Domain::Disk => 0,
             Domain::Sphere => 1,
+            Domain::Equatorial => 2,
         }
     }
 
@@ -35,6 +48,7 @@ impl Domain {
         match code {
             0 => Some(Domain::Disk),
             1 => Some(Domain::Sphere),
+            2 => Some(Domain::Equatorial),
             _ => None,
         }
     }
@@ -286,7 +300,7 @@ impl ModelDef {
     #[must_use]
     pub fn accepts_incident_z(&self, wi_z: f32) -> bool {
         match (self.domain, self.incident) {
-            (Domain::Sphere, IncidentRange::WholeSphere) => true,
+            (Domain::Sphere | Domain::Equatorial, IncidentRange::WholeSphere) => true,
             _ => wi_z >= 0.0,
         }
     }

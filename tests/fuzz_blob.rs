@@ -91,7 +91,7 @@ fn corpus() -> Vec<(String, Vec<u8>)> {
     let mut rng = Rng::new(7);
     let mut k = 0;
     for base in [ModelDef::paper_disk(), ModelDef::paper_sphere()] {
-        for domain in [Domain::Disk, Domain::Sphere] {
+        for domain in [Domain::Disk, Domain::Sphere, Domain::Equatorial] {
             for precision in [Precision::F32, Precision::F16] {
                 for isotropic in [false, true] {
                     let mut def = base;

@@ -13,7 +13,7 @@ fn chain(def: &ModelDef, net: Net) -> Vec<Layer> {
 fn definitions() -> Vec<ModelDef> {
     let mut defs = Vec::new();
     for base in [ModelDef::paper_disk(), ModelDef::paper_sphere()] {
-        for domain in [Domain::Disk, Domain::Sphere] {
+        for domain in [Domain::Disk, Domain::Sphere, Domain::Equatorial] {
             let mut def = base;
             def.domain = domain;
             defs.push(def);

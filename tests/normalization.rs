@@ -5,7 +5,7 @@ mod support;
 
 use diffbsdf::glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
-use support::{direction, random_disk, random_sphere};
+use support::{direction, random_disk, random_isotropic_equatorial, random_sphere};
 
 /// Allowed error of `integral + lost mass` against 1.
 const NORMALIZATION_TOL: f64 = 1e-3;
@@ -106,5 +106,30 @@ fn sphere_pdf_integrates_to_one_minus_lost_mass() {
             integral > 0.2,
             "the test model must keep a good part of its mass in the domain"
         );
+    }
+}
+
+/// `integral + lost = 1` within the tolerance, with enough mass kept for a useful test.
+fn check_sphere_total(label: &str, integral: f64, lost: f64) {
+    let total = integral + lost;
+    println!("{label}: integral {integral:.6} + lost {lost:.6} = {total:.6}");
+    assert!(
+        (total - 1.0).abs() <= NORMALIZATION_TOL,
+        "{label}: {integral} + {lost} = {total}"
+    );
+    assert!(
+        integral > 0.2,
+        "{label}: too much mass lost for a useful test"
+    );
+}
+
+#[test]
+fn equatorial_pdf_integrates_to_one_minus_lost_mass() {
+    for (seed, steps, a, b) in [(21u64, 8u32, 0.3f32, 0.1f32), (22, 4, 0.97, 0.5)] {
+        let m = random_isotropic_equatorial(seed, 2);
+        let wi = direction(a, b, false);
+        let integral = sphere_integral(|wo| m.pdf_steps(wi, wo, steps));
+        let lost = lost_mass(|u| m.sample_direction_steps(wi, u, steps).is_some());
+        check_sphere_total(&format!("equatorial seed {seed}"), integral, lost);
     }
 }

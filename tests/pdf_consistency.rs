@@ -6,7 +6,8 @@ mod support;
 use diffbsdf::glam::Vec2;
 use proptest::prelude::*;
 use support::{
-    direction, random_disk, random_isotropic_disk, random_isotropic_sphere, random_sphere, rel,
+    direction, random_disk, random_equatorial, random_isotropic_disk, random_isotropic_equatorial,
+    random_isotropic_sphere, random_sphere, rel,
 };
 
 /// Allowed relative difference between `pdf(wi, wo)` and the sampled PDF.
@@ -57,5 +58,15 @@ consistency!(
 consistency!(
     isotropic_sphere_pdf_of_sample_matches_sampled_pdf,
     random_isotropic_sphere,
+    false
+);
+consistency!(
+    equatorial_pdf_of_sample_matches_sampled_pdf,
+    random_equatorial,
+    false
+);
+consistency!(
+    isotropic_equatorial_pdf_of_sample_matches_sampled_pdf,
+    random_isotropic_equatorial,
     false
 );

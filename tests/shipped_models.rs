@@ -24,7 +24,7 @@ fn samples_per_model() -> usize {
 /// declared for them.
 fn incident_thetas(domain: Domain, below: bool) -> Vec<f32> {
     let mut deg = vec![0.0f32, 10.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0, 89.9];
-    if domain == Domain::Sphere && below {
+    if domain.is_spherical() && below {
         deg.extend([90.1, 100.0, 135.0, 170.0, 180.0]);
     }
     deg.into_iter().map(f32::to_radians).collect()
@@ -266,7 +266,7 @@ fn lost_share(m: &AnyModel, wi: Vec3, grid: usize) -> f64 {
 fn shipped_sphere_models_integrate_to_one_minus_lost_mass() {
     for (name, bytes) in support::shipped_blobs() {
         let m = AnyModel::from_blob(&bytes).unwrap();
-        if m.def().domain != Domain::Sphere || name.contains(".f16.") {
+        if !m.def().domain.is_spherical() || name.contains(".f16.") {
             continue;
         }
         let mut wis = vec![direction(0.45, 0.6, true)];

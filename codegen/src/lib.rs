@@ -183,6 +183,7 @@ pub(crate) fn header_lines(model: &ModelDesc, options: &Options, prefix: &str) -
     let domain = match d.domain {
         diffbsdf::Domain::Disk => "disk (BRDF, upper hemisphere)",
         diffbsdf::Domain::Sphere => "sphere (full BSDF)",
+        diffbsdf::Domain::Equatorial => "equatorial sphere (full BSDF, pole on the y axis)",
     };
     let e = options.entry_points;
     let mut entries = Vec::new();
@@ -209,7 +210,7 @@ pub(crate) fn header_lines(model: &ModelDesc, options: &Options, prefix: &str) -
         format!(
             "domain {domain}{}{}; base net {}x{} ({} freqs), velocity net {}x{} ({} freqs); {} default steps",
             if d.isotropic { ", isotropic (nets see wi turned to phi = 0)" } else { "" },
-            if d.domain == diffbsdf::Domain::Sphere && !d.accepts_incident_z(-1.0) { ", wi above the surface only" } else { "" },
+            if d.domain.is_spherical() && !d.accepts_incident_z(-1.0) { ", wi above the surface only" } else { "" },
             d.base.hidden_layers, d.base.width, d.base.freqs, d.velocity.hidden_layers,
             d.velocity.width, d.velocity.freqs, d.default_steps
         ),

@@ -113,6 +113,7 @@ pub fn generate_set(materials: &[Material], options: &Options) -> Result<SetCode
                 let domain = match first.def.domain {
                     diffbsdf::Domain::Disk => "disk",
                     diffbsdf::Domain::Sphere => "sphere",
+                    diffbsdf::Domain::Equatorial => "equatorial",
                 };
                 let prefix = n.ident(&format!("{root}_{domain}{gi}"));
                 let mut o = options.clone();

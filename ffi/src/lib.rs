@@ -44,7 +44,8 @@ pub struct diffbsdf_sample_result {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct diffbsdf_info {
-    /// 0: disk (BRDF, upper hemisphere), 1: sphere (full BSDF).
+    /// 0: disk (BRDF, upper hemisphere), 1: sphere (full BSDF), 2: equatorial sphere (pole
+    /// on the tangent y axis).
     pub domain: u32,
     /// 0: f32 weights, 1: f16 weights in the blob.
     pub precision: u32,
@@ -274,6 +275,7 @@ pub unsafe extern "C" fn diffbsdf_model_info(
             domain: match def.domain {
                 Domain::Disk => 0,
                 Domain::Sphere => 1,
+                Domain::Equatorial => 2,
             },
             precision: match def.precision {
                 Precision::F32 => 0,

@@ -258,6 +258,7 @@ impl RawModel {
         match self.model.def().domain {
             Domain::Disk => "disk",
             Domain::Sphere => "sphere",
+            Domain::Equatorial => "equatorial",
         }
     }
 

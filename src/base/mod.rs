@@ -48,7 +48,7 @@ impl BaseDist {
                 mu: [out[0], out[1]],
                 ln_sigma: [clamp(out[2]), clamp(out[3])],
             },
-            Domain::Sphere => BaseDist::Sphere {
+            Domain::Sphere | Domain::Equatorial => BaseDist::Sphere {
                 mu_theta: out[0],
                 ln_sigma: clamp(out[1]),
                 mu_phi: out[2],

@@ -4,7 +4,7 @@ use super::{
     crc32, BlobError, CHECKSUM_LEN, FLAG_ISOTROPIC, FLAG_UPPER_HEMISPHERE, HEADER_LEN, MAGIC,
     VERSION,
 };
-use crate::def::{Domain, IncidentRange};
+use crate::def::IncidentRange;
 use crate::def::{ModelDef, NetShape, Precision, NAME_CAPACITY};
 
 /// Bytes of the blob for `def`.
@@ -112,7 +112,7 @@ fn write_header(def: &ModelDef, h: &mut [u8]) {
     h[24..28].copy_from_slice(&(def.param_count() as u32).to_le_bytes());
     let mut flags = if def.isotropic { FLAG_ISOTROPIC } else { 0 };
     // Implied on the disk: disk blobs keep the bytes they had before the flag existed.
-    if def.domain == Domain::Sphere && def.incident == IncidentRange::UpperHemisphere {
+    if def.domain.is_spherical() && def.incident == IncidentRange::UpperHemisphere {
         flags |= FLAG_UPPER_HEMISPHERE;
     }
     h[28..32].copy_from_slice(&flags.to_le_bytes());

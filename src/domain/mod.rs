@@ -2,6 +2,7 @@
 //! change to solid angle, the features the velocity net sees and how a step moves `x`.
 
 pub mod disk;
+pub mod equatorial;
 pub mod sphere;
 
 use crate::def::Domain;
@@ -15,7 +16,9 @@ impl Domain {
     pub fn features(self, x: [f32; 2]) -> [f32; MAX_FEATURES] {
         match self {
             Domain::Disk => [x[0], x[1], 0.0],
-            Domain::Sphere => [x[0], crate::math::sin(x[1]), crate::math::cos(x[1])],
+            Domain::Sphere | Domain::Equatorial => {
+                [x[0], crate::math::sin(x[1]), crate::math::cos(x[1])]
+            }
         }
     }
 
@@ -28,7 +31,7 @@ impl Domain {
     ) -> ([f32; MAX_FEATURES], [[f32; MAX_FEATURES]; 2]) {
         match self {
             Domain::Disk => ([x[0], x[1], 0.0], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
-            Domain::Sphere => {
+            Domain::Sphere | Domain::Equatorial => {
                 let (s, c) = (crate::math::sin(x[1]), crate::math::cos(x[1]));
                 ([x[0], s, c], [[1.0, 0.0, 0.0], [0.0, c, -s]])
             }
@@ -41,7 +44,7 @@ impl Domain {
     pub fn advance(self, x: [f32; 2], d: [f32; 2]) -> [f32; 2] {
         match self {
             Domain::Disk => [x[0] + d[0], x[1] + d[1]],
-            Domain::Sphere => [x[0] + d[0], sphere::wrap(x[1] + d[1])],
+            Domain::Sphere | Domain::Equatorial => [x[0] + d[0], sphere::wrap(x[1] + d[1])],
         }
     }
 
@@ -51,7 +54,7 @@ impl Domain {
     pub fn difference(self, a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
         match self {
             Domain::Disk => [a[0] - b[0], a[1] - b[1]],
-            Domain::Sphere => [a[0] - b[0], sphere::wrap(a[1] - b[1])],
+            Domain::Sphere | Domain::Equatorial => [a[0] - b[0], sphere::wrap(a[1] - b[1])],
         }
     }
 
@@ -63,6 +66,7 @@ impl Domain {
         match self {
             Domain::Disk => disk::to_direction(x),
             Domain::Sphere => sphere::to_direction(x),
+            Domain::Equatorial => equatorial::to_direction(x),
         }
     }
 
@@ -72,7 +76,7 @@ impl Domain {
     pub fn ln_measure(self, x: [f32; 2], wo: Vec3) -> f32 {
         match self {
             Domain::Disk => disk::ln_measure(wo),
-            Domain::Sphere => sphere::ln_measure(x[0]),
+            Domain::Sphere | Domain::Equatorial => sphere::ln_measure(x[0]),
         }
     }
 
@@ -83,6 +87,7 @@ impl Domain {
         match self {
             Domain::Disk => disk::from_direction(wo),
             Domain::Sphere => sphere::from_direction(wo),
+            Domain::Equatorial => equatorial::from_direction(wo),
         }
     }
 }

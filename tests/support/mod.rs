@@ -91,8 +91,8 @@ fn base_bias(domain: Domain, r: usize, rng: &mut Rng, min_scale: f32) -> f32 {
     let ln_scale = rng.range(min_scale.ln(), 0.4f32.ln());
     match (domain, r) {
         (Domain::Disk, 0 | 1) => rng.range(-0.4, 0.4),
-        (Domain::Sphere, 0) => rng.range(0.3, 2.8),
-        (Domain::Sphere, 2) => rng.range(-3.0, 3.0),
+        (Domain::Sphere | Domain::Equatorial, 0) => rng.range(0.3, 2.8),
+        (Domain::Sphere | Domain::Equatorial, 2) => rng.range(-3.0, 3.0),
         _ => ln_scale,
     }
 }
@@ -133,7 +133,9 @@ fn scale_to_invertible(
             for j in 0..13 {
                 let x = match def.domain {
                     Domain::Disk => [-2.0 + i as f32 / 3.0, -2.0 + j as f32 / 3.0],
-                    Domain::Sphere => [-1.0 + i as f32 * 0.4, -3.1 + j as f32 * 0.52],
+                    Domain::Sphere | Domain::Equatorial => {
+                        [-1.0 + i as f32 * 0.4, -3.1 + j as f32 * 0.52]
+                    }
                 };
                 for t in [0.0, 0.5, 1.0] {
                     probes.push((wi, x, t));
@@ -245,4 +247,24 @@ pub fn shipped_blobs() -> Vec<(String, Vec<u8>)> {
     out.sort();
     assert!(out.len() >= 10, "expected the shipped models in {dir:?}");
     out
+}
+
+/// A random sphere model as [`random_sphere`], on the equatorial chart (the same nets).
+pub fn random_equatorial(seed: u64, min_steps: u32) -> Model4x32 {
+    let mut m = random_sphere(seed, min_steps);
+    let mut def = *m.def();
+    def.domain = Domain::Equatorial;
+    let mut p = vec![0.0; def.param_count()];
+    m.params(&mut p).unwrap();
+    m = Model4x32::from_params(def, &p).unwrap();
+    m
+}
+
+/// [`random_equatorial`], flagged isotropic.
+pub fn random_isotropic_equatorial(seed: u64, min_steps: u32) -> Model4x32 {
+    let m = random_equatorial(seed, min_steps);
+    let (def, p) = flagged_isotropic(m.def(), |p| {
+        m.params(p).unwrap();
+    });
+    Model4x32::from_params(def, &p).unwrap()
 }

@@ -84,7 +84,7 @@ pub fn base_nll(domain: Domain, out: &[f32], x1: [f32; 2], d_out: &mut [f32]) ->
             d_out[3] = (ds1 * m1) as f32;
             l0 + l1
         }
-        Domain::Sphere => {
+        Domain::Sphere | Domain::Equatorial => {
             let (s, ms) = clamp_scale(out[1]);
             let (g, mg) = clamp_scale(out[3]);
             let (l0, dmu, ds) = gaussian_nll(x[0], out[0] as f64, s);

@@ -115,7 +115,7 @@ pub struct MaterialPairs<'a> {
 
 impl TrainingData for MaterialPairs<'_> {
     fn pairs(&self) -> Vec<([f32; 3], [f32; 2])> {
-        let both = self.domain == Domain::Sphere && self.material.is_transmissive();
+        let both = self.domain.is_spherical() && self.material.is_transmissive();
         let cfg = ExactConfig {
             domain: self.domain,
             candidates: 64,
@@ -182,6 +182,11 @@ pub fn to_flow_pair(
     let x1 = match domain {
         Domain::Disk => domain.point_of(f32s(p.wo).into())?,
         Domain::Sphere => [p.wo.theta() as f32, p.wo.phi() as f32],
+        // The equatorial chart is the sphere's about the y axis (docs/math.md, (54)).
+        Domain::Equatorial => {
+            let (x, y, z) = (p.wo.x, p.wo.y, p.wo.z);
+            [(x.hypot(z)).atan2(y) as f32, z.atan2(x) as f32]
+        }
     };
     Some((f32s(p.wi), x1))
 }

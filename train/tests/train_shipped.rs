@@ -28,7 +28,7 @@ fn shipped_models_are_exact_and_invertible() {
     let models = shipped();
     assert!(!models.is_empty());
     for (name, m) in &models {
-        let sphere = m.def().domain == diffbsdf::Domain::Sphere;
+        let sphere = m.def().domain.is_spherical();
         let (mut n, mut bad, mut min_det) = (0usize, 0usize, f32::INFINITY);
         for ti in 0..12 {
             let theta = (ti as f32 + 0.5) / 12.0 * if sphere { 3.1 } else { 1.55 };

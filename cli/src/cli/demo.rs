@@ -63,7 +63,7 @@ pub fn run(args: DemoArgs, out: &mut dyn std::io::Write) -> Result<(), CommandEr
     let material = parse_spec(DEFAULT_SPEC).map_err(CommandError::Spec)?;
     let start = Instant::now();
     let (model, source, reproduces) = if args.train {
-        let cfg = FitConfig::standard(Domain::Disk, DEFAULT_SEED);
+        let cfg = FitConfig::quick(Domain::Disk, DEFAULT_SEED);
         let fitted = fit_material(
             material.as_ref(),
             "conductor-ggx-a0.3-cu-disk",

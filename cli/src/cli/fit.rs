@@ -21,6 +21,8 @@ pub enum DomainArg {
     Disk,
     /// (theta, phi) over the sphere (full BSDFs, grazing specular BRDFs).
     Sphere,
+    /// Spherical coordinates about the tangent y axis (the normal on the equator).
+    Equatorial,
     /// The disk where it suffices; the sphere for transmissive materials, or when the
     /// disk model misses `--max-grazing-firefly` or `--target-rv`.
     Auto,
@@ -32,6 +34,7 @@ impl DomainArg {
         match self {
             DomainArg::Disk => vec![Domain::Disk],
             DomainArg::Sphere => vec![Domain::Sphere],
+            DomainArg::Equatorial => vec![Domain::Equatorial],
             DomainArg::Auto if material.is_transmissive() => vec![Domain::Sphere],
             DomainArg::Auto => vec![Domain::Disk, Domain::Sphere],
         }
@@ -43,8 +46,10 @@ impl DomainArg {
 pub struct FitArgs {
     /// Material spec, e.g. `conductor:ggx,alpha=0.3,metal=Cu`.
     pub spec: String,
-    /// Flow domain.
-    #[arg(long, value_enum, default_value = "disk")]
+    /// Flow domain. The sphere by default: it has no boundary at the horizon, where the
+    /// disk loses measured materials (`docs/measured-materials.md`); the disk model is the
+    /// faster choice for rough analytic BRDFs.
+    #[arg(long, value_enum, default_value = "sphere")]
     pub domain: DomainArg,
     /// Mean RV to reach: the blob's default steps become the fewest of 1, 2, 4, ..., 32
     /// that reach it (with every step invertible); with `--domain auto` a disk model that
@@ -78,6 +83,11 @@ pub struct FitArgs {
     /// A fit of a few seconds (tests, smoke runs) instead of the standard one.
     #[arg(long)]
     pub tiny: bool,
+    /// The quick recipe (about 2.5 minutes on 2 cores; every analytic model in `models/`):
+    /// a 4x64 teacher, 12 000 iterations on 200 000 pairs. Enough for rough analytic
+    /// lobes, not for measured materials.
+    #[arg(long, conflicts_with = "tiny")]
+    pub quick: bool,
     /// Training pairs.
     #[arg(long)]
     pub pairs: Option<usize>,
@@ -281,6 +291,8 @@ pub fn print_json<T: Serialize>(
 pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     let mut c = if args.tiny {
         FitConfig::tiny(domain, args.seed)
+    } else if args.quick {
+        FitConfig::quick(domain, args.seed)
     } else {
         FitConfig::standard(domain, args.seed)
     };

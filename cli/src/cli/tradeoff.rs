@@ -9,7 +9,6 @@ use crate::tradeoff::{
 };
 use clap::Args;
 use diffbsdf::AnyModel;
-use diffbsdf::Domain;
 use diffbsdf_materials::parse_spec;
 use diffbsdf_train::metrics::kl::KlGrid;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -145,7 +144,7 @@ pub fn run(args: TradeoffArgs, out: &mut dyn std::io::Write) -> Result<(), Comma
         for m in &models {
             let material = parse_spec(&m.spec).map_err(CommandError::Spec)?;
             let model = AnyModel::from_blob(&m.f32_blob)?;
-            let sphere = model.def().domain == Domain::Sphere;
+            let sphere = model.def().domain.is_spherical();
             slices::write_png(
                 &model,
                 material.as_ref(),

@@ -1,6 +1,6 @@
 //! Mirrors `src/domain/`: `phi` wrapping (`sphere.rs`), the features the velocity net
 //! sees, how a step advances a flow point, the map to a direction and the measure change
-//! to solid angle (`mod.rs`, `disk.rs`, `sphere.rs`).
+//! to solid angle (`mod.rs`, `disk.rs`, `sphere.rs`, `equatorial.rs`).
 
 use super::Emitter;
 use crate::dialect::{Math, T};
@@ -104,12 +104,18 @@ impl Emitter<'_> {
             ));
             self.code.line(&ret_none);
             self.code.close("}");
+            // The equatorial chart is the sphere's about the y axis.
+            let (second, third) = if self.equatorial() {
+                ("z", "y")
+            } else {
+                ("y", "z")
+            };
             self.code
                 .line(format!("r.x = st * {};", self.math(Math::Cos, "b")));
             self.code
-                .line(format!("r.y = st * {};", self.math(Math::Sin, "b")));
+                .line(format!("r.{second} = st * {};", self.math(Math::Sin, "b")));
             self.code
-                .line(format!("r.z = {};", self.math(Math::Cos, "a")));
+                .line(format!("r.{third} = {};", self.math(Math::Cos, "a")));
         } else {
             self.decl(T::F, "r2", "a * a + b * b");
             self.code

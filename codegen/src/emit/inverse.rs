@@ -255,13 +255,19 @@ impl Emitter<'_> {
             ("wo.x", "wo.y")
         };
         if self.sphere() {
-            let rho = self.math(Math::Sqrt, &format!("{ox} * {ox} + {oy} * {oy}"));
+            // The equatorial chart is the sphere's about the y axis.
+            let (second, third) = if self.equatorial() {
+                ("wo.z", oy)
+            } else {
+                (oy, "wo.z")
+            };
+            let rho = self.math(Math::Sqrt, &format!("{ox} * {ox} + {second} * {second}"));
             self.decl(T::F, "rho", &rho);
             self.code.open(format!("if (!(rho > {zero})) {{"));
             self.code.line(&fail);
             self.code.close("}");
-            self.decl(T::F, "ya", &self.d.atan2("rho", "wo.z"));
-            self.decl(T::F, "yb", &self.d.atan2(oy, ox));
+            self.decl(T::F, "ya", &self.d.atan2("rho", third));
+            self.decl(T::F, "yb", &self.d.atan2(second, ox));
         } else {
             self.code.open(format!("if (!(wo.z > {zero})) {{"));
             self.code.line(&fail);

@@ -112,8 +112,13 @@ impl<'a> Emitter<'a> {
         self.d.weight(&idx)
     }
 
+    /// Spherical coordinates (the sphere or the equatorial chart).
     fn sphere(&self) -> bool {
-        self.m.def.domain == Domain::Sphere
+        self.m.def.domain.is_spherical()
+    }
+    /// The equatorial chart: the sphere's about the y axis.
+    fn equatorial(&self) -> bool {
+        self.m.def.domain == Domain::Equatorial
     }
     fn needs_velocity(&self) -> bool {
         self.e.direction || self.e.pdf

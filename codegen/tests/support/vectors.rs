@@ -95,8 +95,8 @@ fn base_bias(domain: Domain, r: usize, rng: &mut Rng) -> f32 {
     let ln_scale = rng.range(0.08f32.ln(), 0.4f32.ln());
     match (domain, r) {
         (Domain::Disk, 0 | 1) => rng.range(-0.4, 0.4),
-        (Domain::Sphere, 0) => rng.range(0.3, 2.8),
-        (Domain::Sphere, 2) => rng.range(-3.0, 3.0),
+        (Domain::Sphere | Domain::Equatorial, 0) => rng.range(0.3, 2.8),
+        (Domain::Sphere | Domain::Equatorial, 2) => rng.range(-3.0, 3.0),
         _ => ln_scale,
     }
 }
@@ -126,6 +126,14 @@ pub fn test_models() -> Vec<TestModel> {
     };
     let disk = ModelDef::paper_disk();
     let sphere = ModelDef::paper_sphere();
+    let equatorial = ModelDef {
+        domain: Domain::Equatorial,
+        ..sphere
+    };
+    let upper = |mut d: ModelDef| {
+        d.incident = diffbsdf::IncidentRange::UpperHemisphere;
+        d
+    };
     let mut models = vec![
         TestModel {
             name: "random_disk".into(),
@@ -152,6 +160,18 @@ pub fn test_models() -> Vec<TestModel> {
             blob: random_blob(
                 &named(iso(sphere), "random_sphere_iso", Precision::F32),
                 15,
+                1.2,
+            ),
+        },
+        TestModel {
+            name: "random_equatorial_iso".into(),
+            blob: random_blob(
+                &named(
+                    upper(iso(equatorial)),
+                    "random_equatorial_iso",
+                    Precision::F32,
+                ),
+                16,
                 1.2,
             ),
         },
@@ -285,7 +305,7 @@ pub fn incident_directions(domain: Domain) -> Vec<[f32; 3]> {
         v.push(dir(theta, 0.7 + 1.9 * k as f32));
     }
     v.push([1.0, 0.0, 0.0]); // exactly grazing: z = 0
-    if domain == Domain::Sphere {
+    if domain.is_spherical() {
         v.push(dir(2.0, -2.5));
         v.push(dir(std::f32::consts::PI - 0.1, 1.0));
         v.push([0.0, 0.0, -1.0]);
@@ -425,6 +445,8 @@ pub fn measure_condition(domain: Domain, wo: [f32; 3]) -> f32 {
     let c = match domain {
         Domain::Sphere => z / rho,
         Domain::Disk => rho / z,
+        // The chart's theta is measured from the y axis.
+        Domain::Equatorial => wo[1].abs() / (wo[0] * wo[0] + wo[2] * wo[2]).sqrt(),
     };
     if c.is_finite() {
         c

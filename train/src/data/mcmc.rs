@@ -67,7 +67,7 @@ fn decode(x: &[f64; DIM], domain: Domain) -> Option<(DVec3, DVec3)> {
     }
     let wi = equal_area_square_to_sphere([x[0], x[1]]);
     let wo = match domain {
-        Domain::Sphere => {
+        Domain::Sphere | Domain::Equatorial => {
             if x[2].abs() > 1.0 || x[3].abs() > 1.0 {
                 return None;
             }
@@ -93,7 +93,7 @@ fn density(m: &dyn Material, band: &Band, domain: Domain, x: &[f64; DIM]) -> f64
         return 0.0;
     }
     match domain {
-        Domain::Sphere => domain.target(m, wi, wo),
+        Domain::Sphere | Domain::Equatorial => domain.target(m, wi, wo),
         Domain::Disk => {
             let v = m.eval_luminance(wi, wo);
             if v.is_finite() && v > 0.0 {
@@ -110,7 +110,7 @@ fn uniform_state(band: &Band, domain: Domain, rng: &mut Pcg64) -> [f64; DIM] {
     let wi = band.sample_uniform([rng.gen(), rng.gen()]);
     let a = equal_area_sphere_to_square(wi);
     let b = match domain {
-        Domain::Sphere => [rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)],
+        Domain::Sphere | Domain::Equatorial => [rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)],
         Domain::Disk => loop {
             let p = [rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)];
             if p[0] * p[0] + p[1] * p[1] < 1.0 {

@@ -19,7 +19,7 @@ impl DomainTarget for Domain {
     fn contains(self, wo: DVec3) -> bool {
         match self {
             Domain::Disk => wo.z > 0.0,
-            Domain::Sphere => wo.z != 0.0,
+            Domain::Sphere | Domain::Equatorial => wo.z != 0.0,
         }
     }
 

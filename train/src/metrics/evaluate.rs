@@ -182,7 +182,7 @@ fn summarize(rows: &[WiRow], pick: impl Fn(&WiRow) -> &SamplerRow) -> SamplerSum
 /// Measures `model` against `material` on the fixed grid.
 pub fn evaluate(model: &AnyModel, material: &dyn Material, cfg: &EvalConfig) -> Report {
     let domain = model.def().domain;
-    let both = domain == Domain::Sphere && material.is_transmissive();
+    let both = domain.is_spherical() && material.is_transmissive();
     let grid = wi_grid(both);
     let per_wi: Vec<(WiRow, ConsistencySamples)> = grid
         .par_iter()
@@ -233,6 +233,7 @@ pub fn evaluate(model: &AnyModel, material: &dyn Material, cfg: &EvalConfig) -> 
         domain: match domain {
             Domain::Disk => "disk",
             Domain::Sphere => "sphere",
+            Domain::Equatorial => "equatorial",
         },
         steps: def.default_steps,
         blob_bytes_f32: diffbsdf::internals::blob::HEADER_LEN
