@@ -8,36 +8,34 @@
 //! upper hemisphere is `phi` in `(0, pi)`. Everything but the two maps below (features,
 //! base distribution, measure, wrap) is the sphere's.
 
-use crate::math::{atan2, cos, sin, sqrt};
-use core::f32::consts::PI;
+use super::sphere;
 use glam::Vec3;
 
 /// The direction of `(theta, phi)`; `None` unless `sin(theta) > 0` (theta in (0, pi)).
+/// The sphere's direction with y and z exchanged (the same operations).
 #[inline]
 #[must_use]
 pub fn to_direction(x: [f32; 2]) -> Option<Vec3> {
-    let (st, ct) = (sin(x[0]), cos(x[0]));
-    if !(st > 0.0 && x[0] > 0.0 && x[0] < PI) {
-        return None;
-    }
-    Some(Vec3::new(st * cos(x[1]), ct, st * sin(x[1])))
+    sphere::to_direction(x).map(swap_yz)
 }
 
 /// `(theta, phi)` of a unit direction; `None` on the poles `wo = (0, +-1, 0)`.
 #[inline]
 #[must_use]
 pub fn from_direction(wo: Vec3) -> Option<[f32; 2]> {
-    let rho = sqrt(wo.x * wo.x + wo.z * wo.z);
-    if !(rho > 0.0) {
-        return None;
-    }
-    Some([atan2(rho, wo.y), atan2(wo.z, wo.x)])
+    sphere::from_direction(swap_yz(wo))
+}
+
+/// The reflection that exchanges the y and z axes (its own inverse).
+#[inline(always)]
+fn swap_yz(v: Vec3) -> Vec3 {
+    Vec3::new(v.x, v.z, v.y)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use core::f32::consts::FRAC_PI_2;
+    use core::f32::consts::{FRAC_PI_2, PI};
 
     #[test]
     fn normal_is_on_the_equator() {
