@@ -112,3 +112,38 @@ fn auto_goes_straight_to_the_sphere_for_transmissive_materials() {
     assert_eq!((c[0].0.as_str(), c[0].1), ("sphere", 8));
     assert_eq!(blob_steps_and_domain(&out).1, diffbsdf::Domain::Sphere);
 }
+
+#[test]
+fn plain_fit_ships_steps_it_checked_to_be_invertible() {
+    let out = scratch("plain.dbsdf");
+    let v = fit(
+        "conductor:ggx,alpha=0.3,metal=Cu",
+        &["--domain", "disk"],
+        &out,
+    );
+    let c = checks(&v);
+    // N, 2N, 4N, ... from the trained N = 4 of the disk, until one is invertible.
+    assert!(!c.is_empty(), "no invertibility check was made");
+    assert_eq!(c[0].1, 4, "{c:?}");
+    for pair in c.windows(2) {
+        assert_eq!(pair[1].1, (pair[0].1 * 2).min(32), "{c:?}");
+        assert!(!pair[0].2, "checked on past a sufficient step count: {c:?}");
+    }
+    let shipped = blob_steps_and_domain(&out).0 as u64;
+    match c.iter().find(|x| x.2) {
+        Some(ok) => assert_eq!(shipped, ok.1, "{c:?}"),
+        None => assert_eq!(shipped, 4, "{c:?}"),
+    }
+}
+
+#[test]
+fn export_steps_overrides_the_invertibility_choice() {
+    let out = scratch("exported.dbsdf");
+    let v = fit(
+        "conductor:ggx,alpha=0.3,metal=Cu",
+        &["--domain", "disk", "--export-steps", "3"],
+        &out,
+    );
+    assert!(checks(&v).is_empty());
+    assert_eq!(blob_steps_and_domain(&out).0, 3);
+}

@@ -2,7 +2,7 @@
 //! trains a sampler for a material and writes its blob (f32 at `--out`, f16 beside it as
 //! `<stem>.f16.dbsdf`), then measures its quality unless `--no-eval`.
 
-use super::choose::{fewest_steps, Candidate, Criteria};
+use super::choose::{fewest_steps, invertible_steps, Candidate, Criteria};
 use clap::{Args, ValueEnum};
 use diffbsdf::{Domain, Precision};
 use diffbsdf_materials::{parse_spec, SpecError};
@@ -60,7 +60,8 @@ pub struct FitArgs {
     /// allowed at grazing wi (theta_i >= 85 deg) before the sphere is used instead.
     #[arg(long, default_value_t = 20.0)]
     pub max_grazing_firefly: f64,
-    /// Samples per wi of the `--domain auto` / `--target-rv` checks.
+    /// Samples per wi of the checks (`--domain auto`, `--target-rv`, and the invertibility
+    /// of the shipped steps).
     #[arg(long, default_value_t = 1 << 14)]
     pub check_samples: usize,
     /// Euler steps of the student (default 4 on the disk, 8 on the sphere).
@@ -69,8 +70,9 @@ pub struct FitArgs {
     /// Seed of every random draw: the same command and seed give the same blob.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Euler steps stored in the blob as its default, when they should differ from the
-    /// steps the student was trained at (`--steps`): more steps keep every step
+    /// Euler steps stored in the blob as its default (without it: the trained steps, or
+    /// 2x, 4x, ... of them where a checked step is not invertible there), when they should
+    /// differ from the steps the student was trained at (`--steps`): more steps keep every step
     /// invertible where a sharp lobe needs it; the PDF stays exact either way.
     #[arg(long)]
     pub export_steps: Option<u16>,
@@ -362,6 +364,13 @@ fn fit_choosing(
         let bars = Bars::default();
         let mut fitted = fit_material(material, name, &config(args, domain), &bars)?;
         if !choosing {
+            // Unless told otherwise, ship the fewest steps (N, 2N, ...) with every
+            // checked step invertible.
+            if args.export_steps.is_none() {
+                let (steps, tried) = invertible_steps(&fitted.model, material, args.check_samples);
+                checks.extend(tried);
+                fitted.model = fitted.model.with_steps(steps);
+            }
             return Ok((fitted, checks));
         }
         let (pick, tried) = fewest_steps(&fitted.model, material, &criteria);
