@@ -1,6 +1,8 @@
 //! Samples per second of the kernel's three entry points, for the paper's disk (3x32, N=4)
 //! and sphere (4x32, N=8) architectures, with f32 and f16 weights, over 4096 precomputed
-//! inputs per iteration (one core).
+//! inputs per iteration (one core). The models are the shipped rough-copper ones: the
+//! forward passes cost the same for any weights of a shape, but the inverse's Newton
+//! iterations depend on how straight the trained flow is, which random weights are not.
 //!
 //! `cargo bench --bench kernel`; throughput is reported in elements (samples) per second.
 
@@ -9,27 +11,9 @@ mod support;
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::{internals::blob::blob_len, Model, Precision, Sample};
+use diffbsdf::{Model, Model3x32, Model4x32, Sample};
 
 const BATCH: usize = 4096;
-
-fn round_trip<
-    const A: usize,
-    const B: usize,
-    const C: usize,
-    const D: usize,
-    const E: usize,
-    const F: usize,
->(
-    m: &Model<A, B, C, D, E, F>,
-    precision: Precision,
-) -> Model<A, B, C, D, E, F> {
-    let mut def = *m.def();
-    def.precision = precision;
-    let mut bytes = vec![0u8; blob_len(&def)];
-    m.write_blob(precision, &mut bytes).unwrap();
-    Model::from_blob(&bytes).unwrap()
-}
 
 fn inputs(upper: bool) -> (Vec<Vec3>, Vec<Vec2>) {
     let mut rng = support::Rng::new(99);
@@ -52,26 +36,24 @@ fn bench_model<
 >(
     c: &mut Criterion,
     label: &str,
-    model: &Model<A, B, C, D, E, F>,
+    models: [(&str, Model<A, B, C, D, E, F>); 2],
     upper: bool,
 ) {
     let (wi, u) = inputs(upper);
-    let steps = model.default_steps();
+    let steps = models[0].1.default_steps();
     let mut group = c.benchmark_group(format!("{label}_n{steps}"));
     group.throughput(Throughput::Elements(BATCH as u64));
     group.sample_size(20);
-    for precision in [Precision::F32, Precision::F16] {
-        let m = round_trip(model, precision);
-        let p = format!("{precision:?}").to_lowercase();
+    for (p, m) in models {
         let mut dirs = vec![Vec3::ZERO; BATCH];
-        group.bench_function(BenchmarkId::new("direction_only", &p), |b| {
+        group.bench_function(BenchmarkId::new("direction_only", p), |b| {
             b.iter(|| {
                 m.sample_direction_batch(black_box(&wi), black_box(&u), steps, &mut dirs)
                     .unwrap()
             })
         });
         let mut samples = vec![Sample::INVALID; BATCH];
-        group.bench_function(BenchmarkId::new("direction_and_pdf", &p), |b| {
+        group.bench_function(BenchmarkId::new("direction_and_pdf", p), |b| {
             b.iter(|| {
                 m.sample_batch(black_box(&wi), black_box(&u), steps, &mut samples)
                     .unwrap()
@@ -83,7 +65,7 @@ fn bench_model<
             .map(|(s, w)| if s.is_valid() { s.wo } else { *w })
             .collect();
         let mut pdfs = vec![0.0f32; BATCH];
-        group.bench_function(BenchmarkId::new("pdf_of_direction", &p), |b| {
+        group.bench_function(BenchmarkId::new("pdf_of_direction", p), |b| {
             b.iter(|| {
                 m.pdf_batch(black_box(&wi), black_box(&wo), steps, &mut pdfs)
                     .unwrap()
@@ -93,9 +75,33 @@ fn bench_model<
     group.finish();
 }
 
+/// The shipped f32 and f16 blobs of `name` in `models/`.
+fn shipped<
+    const A: usize,
+    const B: usize,
+    const C: usize,
+    const D: usize,
+    const E: usize,
+    const F: usize,
+>(
+    name: &str,
+) -> [(&'static str, Model<A, B, C, D, E, F>); 2] {
+    let load = |file: String| {
+        let path = format!("{}/models/{file}", env!("CARGO_MANIFEST_DIR"));
+        let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        Model::from_blob(&bytes).unwrap_or_else(|e| panic!("{path}: {e}"))
+    };
+    [
+        ("f32", load(format!("{name}.dbsdf"))),
+        ("f16", load(format!("{name}.f16.dbsdf"))),
+    ]
+}
+
 fn kernel(c: &mut Criterion) {
-    bench_model(c, "disk_3x32", &support::random_disk(1, 2), true);
-    bench_model(c, "sphere_4x32", &support::random_sphere(1, 4), false);
+    let disk: [(&str, Model3x32); 2] = shipped("conductor-ggx-a0.3-cu-disk");
+    bench_model(c, "disk_3x32", disk, true);
+    let sphere: [(&str, Model4x32); 2] = shipped("conductor-ggx-a0.3-cu-sphere");
+    bench_model(c, "sphere_4x32", sphere, true);
 }
 
 criterion_group!(benches, kernel);

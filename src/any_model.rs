@@ -110,18 +110,21 @@ impl AnyModel {
     }
 
     /// See [`crate::Model::sample_direction_steps`].
+    #[inline(always)]
     #[must_use]
     pub fn sample_direction_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Vec3> {
         with_model!(self, m => m.sample_direction_steps(wi, u, steps))
     }
 
     /// See [`crate::Model::sample_steps`].
+    #[inline(always)]
     #[must_use]
     pub fn sample_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Sample> {
         with_model!(self, m => m.sample_steps(wi, u, steps))
     }
 
     /// See [`crate::Model::pdf_steps`].
+    #[inline(always)]
     #[must_use]
     pub fn pdf_steps(&self, wi: Vec3, wo: Vec3, steps: u32) -> f32 {
         with_model!(self, m => m.pdf_steps(wi, wo, steps))

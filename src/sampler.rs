@@ -4,7 +4,7 @@
 //! |---|---|
 //! | [`Model::sample_direction`] | base net, `N` velocity evaluations |
 //! | [`Model::sample`] | + forward Jacobians and `N` determinants |
-//! | [`Model::pdf`] | `N` Newton inversions (about 4 Jacobian evaluations each) |
+//! | [`Model::pdf`] | `N` Newton inversions (2 to 3 Jacobian evaluations each) |
 //!
 //! The `_steps` variants take the number of Euler steps per call; the plain ones use the
 //! model's default. Densities are per unit solid angle. Invalid input, or a sample that
@@ -91,7 +91,7 @@ impl<
 
     /// [`Model::sample_direction`] with `steps` Euler steps (0: the model's default; at
     /// most [`spec::MAX_STEPS`], `None` above).
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn sample_direction_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Vec3> {
         let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
@@ -105,7 +105,7 @@ impl<
 
     /// [`Model::sample`] with `steps` Euler steps (0: the model's default; at most
     /// [`spec::MAX_STEPS`], `None` above).
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn sample_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Sample> {
         let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
@@ -124,12 +124,13 @@ impl<
 
     /// [`Model::pdf`] with `steps` Euler steps (0: the model's default; at most
     /// [`spec::MAX_STEPS`]); 0 for invalid input.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn pdf_steps(&self, wi: Vec3, wo: Vec3, steps: u32) -> f32 {
         self.pdf_inner(wi, wo, steps).unwrap_or(0.0)
     }
 
+    #[inline(always)]
     fn pdf_inner(&self, wi: Vec3, wo: Vec3, steps: u32) -> Option<f32> {
         let (wi, wo) = (self.incident(wi)?, unit_direction(wo)?);
         let steps = self.resolve_steps(steps)?;

@@ -16,8 +16,9 @@
  *   numeric input is not an error: sampling answers DIFFBSDF_NO_SAMPLE with zero outputs,
  *   a PDF query answers 0. Null or misaligned pointers (float arrays need 4-byte
  *   alignment) and out-of-range lengths are errors; nothing is written then.
- * - No call allocates except diffbsdf_model_new. Calls on one model are thread-safe
- *   (the model is read only after loading).
+ * - No call allocates except diffbsdf_model_new and the *_parallel batch calls (which
+ *   start threads). Calls on one model are thread-safe (the model is read only after
+ *   loading).
  */
 #ifndef DIFFBSDF_H
 #define DIFFBSDF_H
@@ -139,6 +140,22 @@ diffbsdf_status diffbsdf_sample_batch(const diffbsdf_model *model, const float *
 /** Batch diffbsdf_pdf: `wi` and `wo` hold 3 * count floats, `pdf` count floats. */
 diffbsdf_status diffbsdf_pdf_batch(const diffbsdf_model *model, const float *wi,
                                    const float *wo, size_t count, uint32_t steps, float *pdf);
+
+/** The three batch calls on `threads` threads (0: every core available to the process; at
+ *  most 256, and at most one per 256 elements). The batch is cut into contiguous ranges,
+ *  one per thread, each computed exactly as the one-thread call computes it: the outputs
+ *  do not depend on the thread count. These calls start threads (and so allocate); with
+ *  one thread they do not. Same pointer rules as above. */
+diffbsdf_status diffbsdf_sample_direction_batch_parallel(const diffbsdf_model *model,
+                                                         const float *wi, const float *u,
+                                                         size_t count, uint32_t steps,
+                                                         uint32_t threads, float *wo);
+diffbsdf_status diffbsdf_sample_batch_parallel(const diffbsdf_model *model, const float *wi,
+                                               const float *u, size_t count, uint32_t steps,
+                                               uint32_t threads, diffbsdf_sample_result *out);
+diffbsdf_status diffbsdf_pdf_batch_parallel(const diffbsdf_model *model, const float *wi,
+                                            const float *wo, size_t count, uint32_t steps,
+                                            uint32_t threads, float *pdf);
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -14,7 +14,7 @@ impl<
     > Model<BE, BW, BM, VE, VW, VM>
 {
     /// `x_N` from `x0` (eq. 4 of the paper): no Jacobians.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn flow(&self, c: &Conditioned<VW>, x0: [f32; 2], steps: u32) -> [f32; 2] {
         let domain = self.def.domain;
         let h = 1.0 / steps as f32;
@@ -29,7 +29,7 @@ impl<
 
     /// `x_N` and `sum_k ln det(I + h dv/dx(x_k))`; `None` if a step is not orientation
     /// preserving (`det <= 0`), where the density formula would not hold.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn flow_with_ln_det(
         &self,
         c: &Conditioned<VW>,

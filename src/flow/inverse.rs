@@ -22,66 +22,76 @@ impl<
 {
     /// `x0` and `sum_k ln det(I + h dv/dx(x_k))` for the end point `y`; `None` if a step
     /// cannot be inverted (Newton did not converge, or `det <= 0`).
-    #[inline]
+    ///
+    /// Each step starts from `x_{k+1} - h v(x_{k+1}, t_{k+1})`: the velocity where the
+    /// trajectory is at the next time, which the previous inversion already evaluated (for
+    /// the last step, one evaluation at `t = 1`). A rectified flow moves along nearly
+    /// straight lines at nearly constant speed, so this start is close to `x_k`
+    /// (docs/math.md, (43)).
+    #[inline(always)]
     pub(crate) fn flow_inverse(
         &self,
         c: &Conditioned<VW>,
         y: [f32; 2],
         steps: u32,
     ) -> Option<([f32; 2], f32)> {
+        let domain = self.def.domain;
         let h = 1.0 / steps as f32;
-        let mut x = self.def.domain.advance(y, [0.0, 0.0]);
+        let mut x = domain.advance(y, [0.0, 0.0]);
+        let end = self.velocity.at_time(&c.cond, step_time(steps, h));
+        let mut v = self.velocity.velocity(&end, domain.features(x));
         let mut ln_det = 0.0;
         for k in (0..steps).rev() {
             let step = self.velocity.at_time(&c.cond, step_time(k, h));
-            let (prev, det) = self.invert_step(&step, x, h)?;
-            ln_det += ln(det);
-            x = prev;
+            let root = self.invert_step(&step, x, v, h)?;
+            ln_det += ln(root.det);
+            (x, v) = (root.x, root.v);
         }
         Some((x, ln_det))
     }
 
-    /// Solves `x + h v(x) = y` for one step; returns `x` and `det(I + h dv/dx(x))`.
+    /// Solves `x + h v(x) = y` for one step, starting from `y - h v_next`.
     ///
     /// Newton steps where `I + h dv/dx` is orientation preserving, fixed-point steps
     /// `x <- y - h v(x)` where it is not, each with a backtracking line search on the
     /// residual (halving the step until the residual shrinks), which breaks the two-cycles
     /// plain Newton can fall into on strongly curved velocity fields.
-    #[inline]
-    fn invert_step(&self, step: &[f32; VW], y: [f32; 2], h: f32) -> Option<([f32; 2], f32)> {
+    #[inline(always)]
+    fn invert_step(&self, step: &[f32; VW], y: [f32; 2], v_next: [f32; 2], h: f32) -> Option<Root> {
         let domain = self.def.domain;
-        let v = self.velocity.velocity(step, domain.features(y));
-        let first = domain.advance(y, [-h * v[0], -h * v[1]]);
-        // Rarely, Newton from `y - h v(y)` falls into a cycle on a strongly curved field;
-        // then it restarts from one fixed-point iterate further, and from `y - h v / 2`.
-        self.newton(step, first, y, h)
-            .or_else(|| {
-                let v1 = self.velocity.velocity(step, domain.features(first));
-                self.newton(step, domain.advance(y, [-h * v1[0], -h * v1[1]]), y, h)
-            })
-            .or_else(|| {
-                self.newton(
-                    step,
-                    domain.advance(y, [-0.5 * h * v[0], -0.5 * h * v[1]]),
-                    y,
-                    h,
-                )
-            })
+        let from = |v: [f32; 2], s: f32| domain.advance(y, [-s * h * v[0], -s * h * v[1]]);
+        // Rarely, Newton falls into a cycle on a strongly curved field; then it restarts
+        // from `y - h v(y)` (the velocity at this step's time), from one fixed-point
+        // iterate further, and from `y - h v(y) / 2` (docs/math.md, (43)). One call site
+        // of `newton`, so that it is inlined once.
+        let mut v = v_next;
+        for start in 0..4 {
+            let x = match start {
+                0 => from(v_next, 1.0),
+                1 => {
+                    v = self.velocity.velocity(step, domain.features(y));
+                    from(v, 1.0)
+                }
+                2 => {
+                    let v1 = self.velocity.velocity(step, domain.features(from(v, 1.0)));
+                    from(v1, 1.0)
+                }
+                _ => from(v, 0.5),
+            };
+            if let Some(root) = self.newton(step, x, y, h) {
+                return Some(root);
+            }
+        }
+        None
     }
 
     /// Newton's method for `x + h v(x) = y` from `x`.
-    #[inline]
-    fn newton(
-        &self,
-        step: &[f32; VW],
-        mut x: [f32; 2],
-        y: [f32; 2],
-        h: f32,
-    ) -> Option<([f32; 2], f32)> {
+    #[inline(always)]
+    fn newton(&self, step: &[f32; VW], mut x: [f32; 2], y: [f32; 2], h: f32) -> Option<Root> {
         let domain = self.def.domain;
         let mut at = self.residual(step, x, y, h);
         for _ in 0..NEWTON_MAX_ITERS {
-            let (r, j, det) = at;
+            let (r, j, det) = (at.r, at.j, at.det);
             let d = if det > 0.0 {
                 // d = (I + h J)^-1 r, by the 2x2 adjugate.
                 let (a00, a01, a10, a11) = (
@@ -104,12 +114,21 @@ impl<
             let scale = 1.0 + x[0].abs().max(x[1].abs());
             if size <= NEWTON_TOL * scale {
                 // Converged: the last update is below the f32 noise of `x + h v(x)`. The
-                // determinant is re-evaluated at the returned point, as the forward pass
-                // evaluates it at x_k: where the flow compresses (det << 1) the one at the
-                // previous iterate differs by far more than rounding.
-                let x = domain.advance(x, [-d[0], -d[1]]);
-                let det = self.residual(step, x, y, h).2;
-                return (det > 0.0).then_some((x, det));
+                // determinant is taken at the returned point, as the forward pass takes it
+                // at x_k: where the flow compresses (det << 1) the one at the previous
+                // iterate differs by far more than rounding. Where the update rounds away
+                // (`x - d == x`), the evaluation at `x` is already that one.
+                let next = domain.advance(x, [-d[0], -d[1]]);
+                let fin = if next == x {
+                    at
+                } else {
+                    self.residual(step, next, y, h)
+                };
+                return (fin.det > 0.0).then_some(Root {
+                    x: next,
+                    det: fin.det,
+                    v: fin.v,
+                });
             }
             // Backtracking line search on the residual: from the same `x`, try the full
             // step, then half of it, ... (at most LINE_SEARCH_HALVINGS halvings) and take
@@ -120,35 +139,56 @@ impl<
             let (trial, next) = loop {
                 let trial = domain.advance(x, [-lambda * d[0], -lambda * d[1]]);
                 let next = self.residual(step, trial, y, h);
-                if next.0[0].abs().max(next.0[1].abs()) < norm || halvings == LINE_SEARCH_HALVINGS {
+                if next.r[0].abs().max(next.r[1].abs()) < norm || halvings == LINE_SEARCH_HALVINGS {
                     break (trial, next);
                 }
                 lambda *= 0.5;
                 halvings += 1;
             };
             (x, at) = (trial, next);
-            if lambda * size <= NEWTON_TOL * scale && at.2 > 0.0 {
+            if lambda * size <= NEWTON_TOL * scale && at.det > 0.0 {
                 // The step just taken was below the f32 noise of `x + h v(x)`: converged,
                 // with the determinant evaluated at the returned point.
-                return Some((x, at.2));
+                return Some(Root {
+                    x,
+                    det: at.det,
+                    v: at.v,
+                });
             }
         }
         None
     }
 
-    /// `x + h v(x) - y` (phi difference wrapped), `dv/dx` and `det(I + h dv/dx)` at `x`.
+    /// `x + h v(x) - y` (phi difference wrapped), `v`, `dv/dx` and `det(I + h dv/dx)` at
+    /// `x`.
     #[inline(always)]
-    fn residual(
-        &self,
-        step: &[f32; VW],
-        x: [f32; 2],
-        y: [f32; 2],
-        h: f32,
-    ) -> ([f32; 2], crate::net::Jacobian, f32) {
+    fn residual(&self, step: &[f32; VW], x: [f32; 2], y: [f32; 2], h: f32) -> Residual {
         let domain = self.def.domain;
         let (feat, dfeat) = domain.features_with_derivative(x);
         let (v, j) = self.velocity.velocity_jacobian(step, feat, dfeat);
         let r = domain.difference(domain.advance(x, [h * v[0], h * v[1]]), y);
-        (r, j, step_det(h, &j))
+        Residual {
+            r,
+            v,
+            j,
+            det: step_det(h, &j),
+        }
     }
+}
+
+/// One step's solution: `x_k`, `det(I + h dv/dx(x_k))` and `v(x_k, t_k)`.
+#[derive(Clone, Copy, Debug)]
+struct Root {
+    x: [f32; 2],
+    det: f32,
+    v: [f32; 2],
+}
+
+/// Newton's state at a point: residual, velocity, Jacobian, step determinant.
+#[derive(Clone, Copy, Debug)]
+struct Residual {
+    r: [f32; 2],
+    v: [f32; 2],
+    j: crate::net::Jacobian,
+    det: f32,
 }

@@ -42,7 +42,7 @@ impl<
     > Model<BE, BW, BM, VE, VW, VM>
 {
     /// Evaluates the base net and the velocity net's `wi` part, once per call.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn condition(&self, wi: Vec3) -> Conditioned<VW> {
         let enc: [f32; VE] = encode_wi(wi.to_array());
         let base_enc: [f32; BE] = prefix(&enc);

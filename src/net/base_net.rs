@@ -24,7 +24,7 @@ impl<const E: usize, const W: usize, const M: usize> BaseNet<E, W, M> {
     };
 
     /// The raw outputs (locations and log-scales; see `base::BaseDist::from_net`).
-    #[inline]
+    #[inline(always)]
     pub fn forward(&self, enc: &[f32; E]) -> [f32; BASE_OUTPUTS] {
         let mut h = self.first.forward(enc);
         silu_layer(&mut h);

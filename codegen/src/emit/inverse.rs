@@ -1,5 +1,5 @@
 //! Mirrors `src/flow/inverse.rs`: the residual of one Euler step, Newton's method with its
-//! line search, the three starts of `invert_step`, and the PDF of a given direction.
+//! line search, the four starts of `invert_step`, and the PDF of a given direction.
 
 use super::Emitter;
 use crate::dialect::{Math, T};
@@ -23,7 +23,7 @@ impl Emitter<'_> {
     /// `det(I + h dv/dx)` at `x = (a, b)`.
     pub(super) fn residual(&mut self) {
         self.code
-            .line("// x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).");
+            .line("// x + h v(x) - y (phi wrapped), v, dv/dx and det(I + h dv/dx) at x = (a, b).");
         let cond = self.st("Cond");
         let mut ps = vec![(cond, "cond")];
         ps.extend(Self::step_params());
@@ -41,7 +41,7 @@ impl Emitter<'_> {
         } else {
             self.code.line("r.r1 = (b + h * j.v1) - yb;");
         }
-        for c in ["j00", "j01", "j10", "j11"] {
+        for c in ["v0", "v1", "j00", "j01", "j10", "j11"] {
             self.code.line(format!("r.{c} = j.{c};"));
         }
         self.code.line(format!("r.det = {};", self.det_expr()));
@@ -75,6 +75,8 @@ impl Emitter<'_> {
         self.code.line(format!("x.a = {zero};"));
         self.code.line(format!("x.b = {zero};"));
         self.code.line(format!("x.det = {zero};"));
+        self.code.line(format!("x.va = {zero};"));
+        self.code.line(format!("x.vb = {zero};"));
         self.decl(T::F, "a", "xa");
         self.decl(T::F, "b", "xb");
         let res = self.call("residual", true, &["cond", "t", "h", "ya", "yb", "a", "b"]);
@@ -105,8 +107,10 @@ impl Emitter<'_> {
         self.code.line(
             "// Converged: the update is below the f32 noise of x + h v(x); det is taken at the",
         );
-        self.code
-            .line("// returned point, where the forward pass takes it.");
+        self.code.line(
+            "// returned point, where the forward pass takes it (at x itself where the update",
+        );
+        self.code.line("// rounds away).");
         self.code.line("x.a = a - d0;");
         if self.sphere() {
             let w = self.call("wrap", false, &["b - d1"]);
@@ -114,14 +118,18 @@ impl Emitter<'_> {
         } else {
             self.code.line("x.b = b - d1;");
         }
+        self.code.open("if (x.a != a || x.b != b) {");
         let fin = self.call(
             "residual",
             true,
             &["cond", "t", "h", "ya", "yb", "x.a", "x.b"],
         );
-        self.decl(self.st("Residual"), "fin", &fin);
-        self.code.open(format!("if (fin.det > {zero}) {{"));
-        self.code.line("x.det = fin.det;");
+        self.code.line(format!("at = {fin};"));
+        self.code.close("}");
+        self.code.open(format!("if (at.det > {zero}) {{"));
+        self.code.line("x.det = at.det;");
+        self.code.line("x.va = at.v0;");
+        self.code.line("x.vb = at.v1;");
         self.code.close("}");
         self.code.line("return x;");
         self.code.close("}");
@@ -163,6 +171,8 @@ impl Emitter<'_> {
         self.code.line("x.a = a;");
         self.code.line("x.b = b;");
         self.code.line("x.det = at.det;");
+        self.code.line("x.va = at.v0;");
+        self.code.line("x.vb = at.v1;");
         self.code.line("return x;");
         self.code.close("}");
         self.code.close("}");
@@ -170,42 +180,53 @@ impl Emitter<'_> {
         self.end_fn();
     }
 
-    /// The kernel's `invert_step`: Newton from `y - h v(y)`, then (rarely needed) from one
+    /// The kernel's `invert_step`: Newton from `y - h v_next` (the velocity where the
+    /// trajectory is at the next time), then (rarely needed) from `y - h v(y)`, from one
     /// fixed-point iterate further and from `y - h v(y) / 2`.
     pub(super) fn invert_step(&mut self) {
         self.code.line(
-            "// The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point",
+            "// The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next",
         );
-        self.code
-            .line("// iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).");
+        self.code.line(
+            "// time; else from y - h v(y), one fixed-point iterate further, y - h v(y) / 2.",
+        );
         let cond = self.st("Cond");
         let root = self.st("Root");
         let mut ps = vec![(cond, "cond")];
         ps.extend(Self::step_params());
+        ps.extend([(T::F, "va"), (T::F, "vb")]);
         self.fn_open(root.clone(), "invert_step", true, &ps);
         let zero = self.f(0.0);
-        let v = self.call("velocity", true, &["cond", "t", "ya", "yb"]);
-        self.decl(self.st("Vec2"), "v", &v);
-        let start = |s: &Self, scale: &str, vv: &str| -> (String, String) {
-            let a = format!("ya - {scale}h * {vv}.x");
+        let start = |s: &Self, scale: &str, va: &str, vb: &str| -> (String, String) {
+            let a = format!("ya - {scale}h * {va}");
             let b = if s.sphere() {
-                s.call("wrap", false, &[&format!("yb - {scale}h * {vv}.y")])
+                s.call("wrap", false, &[&format!("yb - {scale}h * {vb}")])
             } else {
-                format!("yb - {scale}h * {vv}.y")
+                format!("yb - {scale}h * {vb}")
             };
             (a, b)
         };
-        let (a0, b0) = start(self, "", "v");
+        let (an, bn) = start(self, "", "va", "vb");
+        self.decl(T::F, "an", &an);
+        self.decl(T::F, "bn", &bn);
+        let nn = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "an", "bn"]);
+        self.decl(root.clone(), "x", &nn);
+        self.code.open(format!("if (x.det > {zero}) {{"));
+        self.code.line("return x;");
+        self.code.close("}");
+        let v = self.call("velocity", true, &["cond", "t", "ya", "yb"]);
+        self.decl(self.st("Vec2"), "v", &v);
+        let (a0, b0) = start(self, "", "v.x", "v.y");
         self.decl(T::F, "a0", &a0);
         self.decl(T::F, "b0", &b0);
         let n0 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a0", "b0"]);
-        self.decl(root.clone(), "x", &n0);
+        self.code.line(format!("x = {n0};"));
         self.code.open(format!("if (x.det > {zero}) {{"));
         self.code.line("return x;");
         self.code.close("}");
         let v1 = self.call("velocity", true, &["cond", "t", "a0", "b0"]);
         self.decl(self.st("Vec2"), "v1", &v1);
-        let (a1, b1) = start(self, "", "v1");
+        let (a1, b1) = start(self, "", "v1.x", "v1.y");
         self.decl(T::F, "a1", &a1);
         self.decl(T::F, "b1", &b1);
         let n1 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a1", "b1"]);
@@ -214,7 +235,7 @@ impl Emitter<'_> {
         self.code.line("return x;");
         self.code.close("}");
         let half = format!("{} * ", self.f(0.5));
-        let (a2, b2) = start(self, &half, "v");
+        let (a2, b2) = start(self, &half, "v.x", "v.y");
         self.decl(T::F, "a2", &a2);
         self.decl(T::F, "b2", &b2);
         let n2 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a2", "b2"]);
@@ -228,8 +249,9 @@ impl Emitter<'_> {
         self.code.line(
             "// The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's",
         );
-        self.code
-            .line("// method on x + h v(x) = y, starting from y - h v(y).");
+        self.code.line(
+            "// method on x + h v(x) = y, starting from y - h v at the next time (the end: t = 1).",
+        );
         let ps = [
             (T::F, "wx"),
             (T::F, "wy"),
@@ -277,17 +299,28 @@ impl Emitter<'_> {
         }
         self.start_point("ya", "yb");
         self.decl(T::F, "ln_det", &zero);
+        let t_end = format!("{} * h", self.d.cast(&T::F, "n"));
+        let v_end = self.call("velocity", true, &["cond", &t_end, "a", "b"]);
+        self.decl(self.st("Vec2"), "vn", &v_end);
+        self.decl(T::F, "va", "vn.x");
+        self.decl(T::F, "vb", "vn.y");
         self.for_open("kk", "n");
         self.decl(T::U, "k", "n - 1u - kk");
         let t = format!("{} * h", self.d.cast(&T::F, "k"));
         self.decl(T::F, "t", &t);
-        let root = self.call("invert_step", true, &["cond", "t", "h", "a", "b"]);
+        let root = self.call(
+            "invert_step",
+            true,
+            &["cond", "t", "h", "a", "b", "va", "vb"],
+        );
         self.decl(self.st("Root"), "x", &root);
         self.code.open(format!("if (!(x.det > {zero})) {{"));
         self.code.line(&fail);
         self.code.close("}");
         self.code.line("a = x.a;");
         self.code.line("b = x.b;");
+        self.code.line("va = x.va;");
+        self.code.line("vb = x.vb;");
         self.code.line(format!(
             "ln_det = ln_det + {};",
             self.math(Math::Log, "x.det")

@@ -232,11 +232,13 @@ impl<'a> Emitter<'a> {
         }
         if self.e.pdf {
             lines.push(
-                "// A Newton residual x + h v(x) - y, dv/dx and det(I + h dv/dx) at x.".into(),
+                "// A Newton residual x + h v(x) - y, v, dv/dx and det(I + h dv/dx) at x.".into(),
             );
             let f = [
                 (T::F, "r0"),
                 (T::F, "r1"),
+                (T::F, "v0"),
+                (T::F, "v1"),
                 (T::F, "j00"),
                 (T::F, "j01"),
                 (T::F, "j10"),
@@ -245,10 +247,16 @@ impl<'a> Emitter<'a> {
             ];
             lines.extend(self.d.struct_decl(&self.p("Residual"), &f));
             lines.push(
-                "// The point x one Euler step came from, and det(I + h dv/dx(x)); det = 0: none."
+                "// The point x one Euler step came from, det(I + h dv/dx(x)) (0: none) and v(x)."
                     .into(),
             );
-            let f = [(T::F, "a"), (T::F, "b"), (T::F, "det")];
+            let f = [
+                (T::F, "a"),
+                (T::F, "b"),
+                (T::F, "det"),
+                (T::F, "va"),
+                (T::F, "vb"),
+            ];
             lines.extend(self.d.struct_decl(&self.p("Root"), &f));
         }
         if self.m.def.isotropic {

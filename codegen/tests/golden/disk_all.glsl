@@ -62,21 +62,25 @@ struct diffbsdf_tiny_disk_Jac {
     float j10;
     float j11;
 };
-// A Newton residual x + h v(x) - y, dv/dx and det(I + h dv/dx) at x.
+// A Newton residual x + h v(x) - y, v, dv/dx and det(I + h dv/dx) at x.
 struct diffbsdf_tiny_disk_Residual {
     float r0;
     float r1;
+    float v0;
+    float v1;
     float j00;
     float j01;
     float j10;
     float j11;
     float det;
 };
-// The point x one Euler step came from, and det(I + h dv/dx(x)); det = 0: none.
+// The point x one Euler step came from, det(I + h dv/dx(x)) (0: none) and v(x).
 struct diffbsdf_tiny_disk_Root {
     float a;
     float b;
     float det;
+    float va;
+    float vb;
 };
 // A rotation about the normal: cos and sin of its angle.
 struct diffbsdf_tiny_disk_Frame {
@@ -464,12 +468,14 @@ diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx, float wy, flo
     return r;
 }
 
-// x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).
+// x + h v(x) - y (phi wrapped), v, dv/dx and det(I + h dv/dx) at x = (a, b).
 diffbsdf_tiny_disk_Residual diffbsdf_tiny_disk_residual(diffbsdf_tiny_disk_Cond cond, float t, float h, float ya, float yb, float a, float b) {
     precise diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
     precise diffbsdf_tiny_disk_Residual r;
     r.r0 = (a + h * j.v0) - ya;
     r.r1 = (b + h * j.v1) - yb;
+    r.v0 = j.v0;
+    r.v1 = j.v1;
     r.j00 = j.j00;
     r.j01 = j.j01;
     r.j10 = j.j10;
@@ -486,6 +492,8 @@ diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_disk_Cond cond, 
     x.a = 0.0;
     x.b = 0.0;
     x.det = 0.0;
+    x.va = 0.0;
+    x.vb = 0.0;
     precise float a = xa;
     precise float b = xb;
     precise diffbsdf_tiny_disk_Residual at = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, a, b);
@@ -504,12 +512,17 @@ diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_disk_Cond cond, 
         precise float scale = 1.0 + max(abs(a), abs(b));
         if (size <= 1e-6 * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
-            // returned point, where the forward pass takes it.
+            // returned point, where the forward pass takes it (at x itself where the update
+            // rounds away).
             x.a = a - d0;
             x.b = b - d1;
-            precise diffbsdf_tiny_disk_Residual fin = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, x.a, x.b);
-            if (fin.det > 0.0) {
-                x.det = fin.det;
+            if (x.a != a || x.b != b) {
+                at = diffbsdf_tiny_disk_residual(cond, t, h, ya, yb, x.a, x.b);
+            }
+            if (at.det > 0.0) {
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
             }
             return x;
         }
@@ -533,19 +546,27 @@ diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_disk_Cond cond, 
             x.a = a;
             x.b = b;
             x.det = at.det;
+            x.va = at.v0;
+            x.vb = at.v1;
             return x;
         }
     }
     return x;
 }
 
-// The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point
-// iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).
-diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_invert_step(diffbsdf_tiny_disk_Cond cond, float t, float h, float ya, float yb) {
+// The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next
+// time; else from y - h v(y), one fixed-point iterate further, y - h v(y) / 2.
+diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_invert_step(diffbsdf_tiny_disk_Cond cond, float t, float h, float ya, float yb, float va, float vb) {
+    precise float an = ya - h * va;
+    precise float bn = yb - h * vb;
+    precise diffbsdf_tiny_disk_Root x = diffbsdf_tiny_disk_newton(cond, t, h, ya, yb, an, bn);
+    if (x.det > 0.0) {
+        return x;
+    }
     precise diffbsdf_tiny_disk_Vec2 v = diffbsdf_tiny_disk_velocity(cond, t, ya, yb);
     precise float a0 = ya - h * v.x;
     precise float b0 = yb - h * v.y;
-    precise diffbsdf_tiny_disk_Root x = diffbsdf_tiny_disk_newton(cond, t, h, ya, yb, a0, b0);
+    x = diffbsdf_tiny_disk_newton(cond, t, h, ya, yb, a0, b0);
     if (x.det > 0.0) {
         return x;
     }
@@ -562,7 +583,7 @@ diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_invert_step(diffbsdf_tiny_disk_Cond c
 }
 
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's
-// method on x + h v(x) = y, starting from y - h v(y).
+// method on x + h v(x) = y, starting from y - h v at the next time (the end: t = 1).
 float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, float ox, float oy, float oz, uint steps) {
     precise diffbsdf_tiny_disk_Unit wo = diffbsdf_tiny_disk_unit(ox, oy, oz);
     if (!wo.ok) {
@@ -592,15 +613,20 @@ float diffbsdf_tiny_disk_pdf_impl(float wx, float wy, float wz, float ox, float 
     precise float a = ya;
     precise float b = yb;
     precise float ln_det = 0.0;
+    precise diffbsdf_tiny_disk_Vec2 vn = diffbsdf_tiny_disk_velocity(cond, float(n) * h, a, b);
+    precise float va = vn.x;
+    precise float vb = vn.y;
     for (uint kk = 0u; kk < n; kk++) {
         uint k = n - 1u - kk;
         precise float t = float(k) * h;
-        precise diffbsdf_tiny_disk_Root x = diffbsdf_tiny_disk_invert_step(cond, t, h, a, b);
+        precise diffbsdf_tiny_disk_Root x = diffbsdf_tiny_disk_invert_step(cond, t, h, a, b, va, vb);
         if (!(x.det > 0.0)) {
             return 0.0;
         }
         a = x.a;
         b = x.b;
+        va = x.va;
+        vb = x.vb;
         ln_det = ln_det + log(x.det);
     }
     precise float pdf = exp(diffbsdf_tiny_disk_base_ln_pdf(cond, a, b) - ln_det + log(wo.z));

@@ -38,21 +38,25 @@ struct diffbsdf_tiny_disk_Jac {
     j10: f32,
     j11: f32,
 }
-// A Newton residual x + h v(x) - y, dv/dx and det(I + h dv/dx) at x.
+// A Newton residual x + h v(x) - y, v, dv/dx and det(I + h dv/dx) at x.
 struct diffbsdf_tiny_disk_Residual {
     r0: f32,
     r1: f32,
+    v0: f32,
+    v1: f32,
     j00: f32,
     j01: f32,
     j10: f32,
     j11: f32,
     det: f32,
 }
-// The point x one Euler step came from, and det(I + h dv/dx(x)); det = 0: none.
+// The point x one Euler step came from, det(I + h dv/dx(x)) (0: none) and v(x).
 struct diffbsdf_tiny_disk_Root {
     a: f32,
     b: f32,
     det: f32,
+    va: f32,
+    vb: f32,
 }
 // A rotation about the normal: cos and sin of its angle.
 struct diffbsdf_tiny_disk_Frame {
@@ -440,12 +444,14 @@ fn diffbsdf_tiny_disk_sample_impl(base: u32, wx: f32, wy: f32, wz: f32, u0: f32,
     return r;
 }
 
-// x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).
+// x + h v(x) - y (phi wrapped), v, dv/dx and det(I + h dv/dx) at x = (a, b).
 fn diffbsdf_tiny_disk_residual(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32, a: f32, b: f32) -> diffbsdf_tiny_disk_Residual {
     var j: diffbsdf_tiny_disk_Jac = diffbsdf_tiny_disk_velocity_jacobian(base, cond, t, a, b);
     var r: diffbsdf_tiny_disk_Residual;
     r.r0 = (a + h * j.v0) - ya;
     r.r1 = (b + h * j.v1) - yb;
+    r.v0 = j.v0;
+    r.v1 = j.v1;
     r.j00 = j.j00;
     r.j01 = j.j01;
     r.j10 = j.j10;
@@ -462,6 +468,8 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
     x.a = 0.0f;
     x.b = 0.0f;
     x.det = 0.0f;
+    x.va = 0.0f;
+    x.vb = 0.0f;
     var a: f32 = xa;
     var b: f32 = xb;
     var at: diffbsdf_tiny_disk_Residual = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, a, b);
@@ -480,12 +488,17 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
         var scale: f32 = 1.0f + max(abs(a), abs(b));
         if (size <= 1e-6f * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
-            // returned point, where the forward pass takes it.
+            // returned point, where the forward pass takes it (at x itself where the update
+            // rounds away).
             x.a = a - d0;
             x.b = b - d1;
-            var fin: diffbsdf_tiny_disk_Residual = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, x.a, x.b);
-            if (fin.det > 0.0f) {
-                x.det = fin.det;
+            if (x.a != a || x.b != b) {
+                at = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, x.a, x.b);
+            }
+            if (at.det > 0.0f) {
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
             }
             return x;
         }
@@ -509,19 +522,27 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
             x.a = a;
             x.b = b;
             x.det = at.det;
+            x.va = at.v0;
+            x.vb = at.v1;
             return x;
         }
     }
     return x;
 }
 
-// The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point
-// iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).
-fn diffbsdf_tiny_disk_invert_step(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32) -> diffbsdf_tiny_disk_Root {
+// The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next
+// time; else from y - h v(y), one fixed-point iterate further, y - h v(y) / 2.
+fn diffbsdf_tiny_disk_invert_step(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32, va: f32, vb: f32) -> diffbsdf_tiny_disk_Root {
+    var an: f32 = ya - h * va;
+    var bn: f32 = yb - h * vb;
+    var x: diffbsdf_tiny_disk_Root = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, an, bn);
+    if (x.det > 0.0f) {
+        return x;
+    }
     var v: diffbsdf_tiny_disk_Vec2 = diffbsdf_tiny_disk_velocity(base, cond, t, ya, yb);
     var a0: f32 = ya - h * v.x;
     var b0: f32 = yb - h * v.y;
-    var x: diffbsdf_tiny_disk_Root = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, a0, b0);
+    x = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, a0, b0);
     if (x.det > 0.0f) {
         return x;
     }
@@ -538,7 +559,7 @@ fn diffbsdf_tiny_disk_invert_step(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f
 }
 
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's
-// method on x + h v(x) = y, starting from y - h v(y).
+// method on x + h v(x) = y, starting from y - h v at the next time (the end: t = 1).
 fn diffbsdf_tiny_disk_pdf_impl(base: u32, wx: f32, wy: f32, wz: f32, ox: f32, oy: f32, oz: f32, steps: u32) -> f32 {
     var wo: diffbsdf_tiny_disk_Unit = diffbsdf_tiny_disk_unit(ox, oy, oz);
     if (!wo.ok) {
@@ -568,15 +589,20 @@ fn diffbsdf_tiny_disk_pdf_impl(base: u32, wx: f32, wy: f32, wz: f32, ox: f32, oy
     var a: f32 = ya;
     var b: f32 = yb;
     var ln_det: f32 = 0.0f;
+    var vn: diffbsdf_tiny_disk_Vec2 = diffbsdf_tiny_disk_velocity(base, cond, f32(n) * h, a, b);
+    var va: f32 = vn.x;
+    var vb: f32 = vn.y;
     for (var kk = 0u; kk < n; kk++) {
         var k: u32 = n - 1u - kk;
         var t: f32 = f32(k) * h;
-        var x: diffbsdf_tiny_disk_Root = diffbsdf_tiny_disk_invert_step(base, cond, t, h, a, b);
+        var x: diffbsdf_tiny_disk_Root = diffbsdf_tiny_disk_invert_step(base, cond, t, h, a, b, va, vb);
         if (!(x.det > 0.0f)) {
             return 0.0f;
         }
         a = x.a;
         b = x.b;
+        va = x.va;
+        vb = x.vb;
         ln_det = ln_det + log(x.det);
     }
     var pdf: f32 = exp(diffbsdf_tiny_disk_base_ln_pdf(cond, a, b) - ln_det + log(wo.z));

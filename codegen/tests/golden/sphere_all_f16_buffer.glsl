@@ -43,21 +43,25 @@ struct diffbsdf_tiny_sphere_Jac {
     float j10;
     float j11;
 };
-// A Newton residual x + h v(x) - y, dv/dx and det(I + h dv/dx) at x.
+// A Newton residual x + h v(x) - y, v, dv/dx and det(I + h dv/dx) at x.
 struct diffbsdf_tiny_sphere_Residual {
     float r0;
     float r1;
+    float v0;
+    float v1;
     float j00;
     float j01;
     float j10;
     float j11;
     float det;
 };
-// The point x one Euler step came from, and det(I + h dv/dx(x)); det = 0: none.
+// The point x one Euler step came from, det(I + h dv/dx(x)) (0: none) and v(x).
 struct diffbsdf_tiny_sphere_Root {
     float a;
     float b;
     float det;
+    float va;
+    float vb;
 };
 // A direction and its PDF; all zero when invalid.
 struct diffbsdf_tiny_sphere_Result {
@@ -433,12 +437,14 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx
     return r;
 }
 
-// x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b).
+// x + h v(x) - y (phi wrapped), v, dv/dx and det(I + h dv/dx) at x = (a, b).
 diffbsdf_tiny_sphere_Residual diffbsdf_tiny_sphere_residual(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float a, float b) {
     precise diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
     precise diffbsdf_tiny_sphere_Residual r;
     r.r0 = (a + h * j.v0) - ya;
     r.r1 = diffbsdf_tiny_sphere_wrap(diffbsdf_tiny_sphere_wrap(b + h * j.v1) - yb);
+    r.v0 = j.v0;
+    r.v1 = j.v1;
     r.j00 = j.j00;
     r.j01 = j.j01;
     r.j10 = j.j10;
@@ -455,6 +461,8 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
     x.a = 0.0;
     x.b = 0.0;
     x.det = 0.0;
+    x.va = 0.0;
+    x.vb = 0.0;
     precise float a = xa;
     precise float b = xb;
     precise diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, a, b);
@@ -473,12 +481,17 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
         precise float scale = 1.0 + max(abs(a), abs(b));
         if (size <= 0.002 * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
-            // returned point, where the forward pass takes it.
+            // returned point, where the forward pass takes it (at x itself where the update
+            // rounds away).
             x.a = a - d0;
             x.b = diffbsdf_tiny_sphere_wrap(b - d1);
-            precise diffbsdf_tiny_sphere_Residual fin = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, x.a, x.b);
-            if (fin.det > 0.0) {
-                x.det = fin.det;
+            if (x.a != a || x.b != b) {
+                at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, x.a, x.b);
+            }
+            if (at.det > 0.0) {
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
             }
             return x;
         }
@@ -502,19 +515,27 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
             x.a = a;
             x.b = b;
             x.det = at.det;
+            x.va = at.v0;
+            x.vb = at.v1;
             return x;
         }
     }
     return x;
 }
 
-// The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point
-// iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles).
-diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb) {
+// The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next
+// time; else from y - h v(y), one fixed-point iterate further, y - h v(y) / 2.
+diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float va, float vb) {
+    precise float an = ya - h * va;
+    precise float bn = diffbsdf_tiny_sphere_wrap(yb - h * vb);
+    precise diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, an, bn);
+    if (x.det > 0.0) {
+        return x;
+    }
     precise diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, ya, yb);
     precise float a0 = ya - h * v.x;
     precise float b0 = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
-    precise diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a0, b0);
+    x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a0, b0);
     if (x.det > 0.0) {
         return x;
     }
@@ -531,7 +552,7 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(uint base, diffbsdf_t
 }
 
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's
-// method on x + h v(x) = y, starting from y - h v(y).
+// method on x + h v(x) = y, starting from y - h v at the next time (the end: t = 1).
 float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, float ox, float oy, float oz, uint steps) {
     precise diffbsdf_tiny_sphere_Unit wo = diffbsdf_tiny_sphere_unit(ox, oy, oz);
     if (!wo.ok) {
@@ -559,15 +580,20 @@ float diffbsdf_tiny_sphere_pdf_impl(uint base, float wx, float wy, float wz, flo
     precise float a = ya;
     precise float b = diffbsdf_tiny_sphere_wrap(yb);
     precise float ln_det = 0.0;
+    precise diffbsdf_tiny_sphere_Vec2 vn = diffbsdf_tiny_sphere_velocity(base, cond, float(n) * h, a, b);
+    precise float va = vn.x;
+    precise float vb = vn.y;
     for (uint kk = 0u; kk < n; kk++) {
         uint k = n - 1u - kk;
         precise float t = float(k) * h;
-        precise diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_invert_step(base, cond, t, h, a, b);
+        precise diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_invert_step(base, cond, t, h, a, b, va, vb);
         if (!(x.det > 0.0)) {
             return 0.0;
         }
         a = x.a;
         b = x.b;
+        va = x.va;
+        vb = x.vb;
         ln_det = ln_det + log(x.det);
     }
     precise float pdf = exp(diffbsdf_tiny_sphere_base_ln_pdf(cond, a, b) - ln_det + -log(sin(ya)));

@@ -48,21 +48,25 @@ typedef struct diffbsdf_tiny_sphere_Jac {
     float j10;
     float j11;
 } diffbsdf_tiny_sphere_Jac;
-/* A Newton residual x + h v(x) - y, dv/dx and det(I + h dv/dx) at x. */
+/* A Newton residual x + h v(x) - y, v, dv/dx and det(I + h dv/dx) at x. */
 typedef struct diffbsdf_tiny_sphere_Residual {
     float r0;
     float r1;
+    float v0;
+    float v1;
     float j00;
     float j01;
     float j10;
     float j11;
     float det;
 } diffbsdf_tiny_sphere_Residual;
-/* The point x one Euler step came from, and det(I + h dv/dx(x)); det = 0: none. */
+/* The point x one Euler step came from, det(I + h dv/dx(x)) (0: none) and v(x). */
 typedef struct diffbsdf_tiny_sphere_Root {
     float a;
     float b;
     float det;
+    float va;
+    float vb;
 } diffbsdf_tiny_sphere_Root;
 /* A direction and its PDF; all zero when invalid. */
 typedef struct diffbsdf_tiny_sphere_Result {
@@ -300,12 +304,14 @@ static inline diffbsdf_tiny_sphere_Unit diffbsdf_tiny_sphere_unit(float x, float
     return r;
 }
 
-/* x + h v(x) - y (phi wrapped), dv/dx and det(I + h dv/dx) at x = (a, b). */
+/* x + h v(x) - y (phi wrapped), v, dv/dx and det(I + h dv/dx) at x = (a, b). */
 static inline diffbsdf_tiny_sphere_Residual diffbsdf_tiny_sphere_residual(const float *params, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float a, float b) {
     diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(params, cond, t, a, b);
     diffbsdf_tiny_sphere_Residual r;
     r.r0 = (a + h * j.v0) - ya;
     r.r1 = diffbsdf_tiny_sphere_wrap(diffbsdf_tiny_sphere_wrap(b + h * j.v1) - yb);
+    r.v0 = j.v0;
+    r.v1 = j.v1;
     r.j00 = j.j00;
     r.j01 = j.j01;
     r.j10 = j.j10;
@@ -322,6 +328,8 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float 
     x.a = 0.0f;
     x.b = 0.0f;
     x.det = 0.0f;
+    x.va = 0.0f;
+    x.vb = 0.0f;
     float a = xa;
     float b = xb;
     diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(params, cond, t, h, ya, yb, a, b);
@@ -340,12 +348,17 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float 
         float scale = 1.0f + fmaxf(fabsf(a), fabsf(b));
         if (size <= 1e-6f * scale) {
             /* Converged: the update is below the f32 noise of x + h v(x); det is taken at the */
-            /* returned point, where the forward pass takes it. */
+            /* returned point, where the forward pass takes it (at x itself where the update */
+            /* rounds away). */
             x.a = a - d0;
             x.b = diffbsdf_tiny_sphere_wrap(b - d1);
-            diffbsdf_tiny_sphere_Residual fin = diffbsdf_tiny_sphere_residual(params, cond, t, h, ya, yb, x.a, x.b);
-            if (fin.det > 0.0f) {
-                x.det = fin.det;
+            if (x.a != a || x.b != b) {
+                at = diffbsdf_tiny_sphere_residual(params, cond, t, h, ya, yb, x.a, x.b);
+            }
+            if (at.det > 0.0f) {
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
             }
             return x;
         }
@@ -369,19 +382,27 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float 
             x.a = a;
             x.b = b;
             x.det = at.det;
+            x.va = at.v0;
+            x.vb = at.v1;
             return x;
         }
     }
     return x;
 }
 
-/* The x with x + h v(x) = y: Newton from y - h v(y), else from one fixed-point */
-/* iterate further, else from y - h v(y) / 2 (breaks rare Newton cycles). */
-static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(const float *params, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb) {
+/* The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next */
+/* time; else from y - h v(y), one fixed-point iterate further, y - h v(y) / 2. */
+static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(const float *params, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float va, float vb) {
+    float an = ya - h * va;
+    float bn = diffbsdf_tiny_sphere_wrap(yb - h * vb);
+    diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(params, cond, t, h, ya, yb, an, bn);
+    if (x.det > 0.0f) {
+        return x;
+    }
     diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(params, cond, t, ya, yb);
     float a0 = ya - h * v.x;
     float b0 = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
-    diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(params, cond, t, h, ya, yb, a0, b0);
+    x = diffbsdf_tiny_sphere_newton(params, cond, t, h, ya, yb, a0, b0);
     if (x.det > 0.0f) {
         return x;
     }
@@ -398,7 +419,7 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(const f
 }
 
 /* The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's */
-/* method on x + h v(x) = y, starting from y - h v(y). */
+/* method on x + h v(x) = y, starting from y - h v at the next time (the end: t = 1). */
 static inline float diffbsdf_tiny_sphere_pdf_impl(const float *params, float wx, float wy, float wz, float ox, float oy, float oz, unsigned steps) {
     diffbsdf_tiny_sphere_Unit wo = diffbsdf_tiny_sphere_unit(ox, oy, oz);
     if (!wo.ok) {
@@ -426,15 +447,20 @@ static inline float diffbsdf_tiny_sphere_pdf_impl(const float *params, float wx,
     float a = ya;
     float b = diffbsdf_tiny_sphere_wrap(yb);
     float ln_det = 0.0f;
+    diffbsdf_tiny_sphere_Vec2 vn = diffbsdf_tiny_sphere_velocity(params, cond, (float)(n) * h, a, b);
+    float va = vn.x;
+    float vb = vn.y;
     for (unsigned kk = 0u; kk < n; kk++) {
         unsigned k = n - 1u - kk;
         float t = (float)(k) * h;
-        diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_invert_step(params, cond, t, h, a, b);
+        diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_invert_step(params, cond, t, h, a, b, va, vb);
         if (!(x.det > 0.0f)) {
             return 0.0f;
         }
         a = x.a;
         b = x.b;
+        va = x.va;
+        vb = x.vb;
         ln_det = ln_det + logf(x.det);
     }
     float pdf = expf(diffbsdf_tiny_sphere_base_ln_pdf(cond, a, b) - ln_det + -logf(sinf(ya)));

@@ -38,47 +38,55 @@ pub fn lavapipe() -> Gpu {
         "{name} lacks {:?}: a newer `{LAVAPIPE_HINT}` is needed",
         needed - adapter.features()
     );
-    let desc = wgpu::DeviceDescriptor {
-        label: Some("diffbsdf conformance"),
-        required_features: needed,
-        required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
-        // SAFETY (of the flag): passthrough shaders are only given SPIR-V that spirv-val
-        // accepted.
-        experimental_features: unsafe { wgpu::ExperimentalFeatures::enabled() },
-        memory_hints: wgpu::MemoryHints::Performance,
-        trace: wgpu::Trace::Off,
-    };
-    let (device, queue) =
-        pollster::block_on(adapter.request_device(&desc)).expect("lavapipe device");
-    let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: None,
-        entries: &[storage(0, true), storage(1, true), storage(2, false)],
-    });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: None,
-        bind_group_layouts: &[Some(&bgl)],
-        immediate_size: 0,
-    });
-    Gpu {
-        device,
-        queue,
-        name,
-        layout,
-        bgl,
-    }
+    Gpu::on(&adapter, needed)
 }
 
 impl Gpu {
+    /// A device on `adapter` with `features`, and the three-buffer layout of the test
+    /// kernels (0 parameters, 1 inputs, 2 outputs).
+    pub fn on(adapter: &wgpu::Adapter, features: wgpu::Features) -> Gpu {
+        let name = adapter.get_info().name;
+        let needed = features;
+        let desc = wgpu::DeviceDescriptor {
+            label: Some("diffbsdf conformance"),
+            required_features: needed,
+            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            // SAFETY (of the flag): passthrough shaders are only given SPIR-V that spirv-val
+            // accepted.
+            experimental_features: unsafe { wgpu::ExperimentalFeatures::enabled() },
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        };
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&desc)).expect("lavapipe device");
+        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: None,
+            entries: &[storage(0, true), storage(1, true), storage(2, false)],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: None,
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        Gpu {
+            device,
+            queue,
+            name,
+            layout,
+            bgl,
+        }
+    }
+
     pub fn wgsl(&self, source: &str) -> wgpu::ShaderModule {
         self.device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -113,6 +121,11 @@ impl Gpu {
                 compilation_options: Default::default(),
                 cache: None,
             })
+    }
+
+    /// The layout of the three buffers (0 parameters, 1 inputs, 2 outputs).
+    pub fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
+        &self.bgl
     }
 
     /// Runs `pipeline` over `inputs` (two vec4 per item), returns two vec4 per item.

@@ -470,9 +470,11 @@ pub fn read_f32s(path: &Path) -> Vec<f32> {
         .collect()
 }
 
-/// A fresh scratch directory under cargo's per-target temp dir.
+/// A fresh scratch directory under cargo's per-target temp dir (tests), or the system's
+/// temp dir (examples, for which cargo sets none).
 pub fn scratch(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let root = option_env!("CARGO_TARGET_TMPDIR").map_or_else(std::env::temp_dir, PathBuf::from);
+    let d = root.join(name);
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("scratch dir");
     d
