@@ -4,14 +4,18 @@
 mod support;
 
 use diffbsdf::glam::Vec2;
+use diffbsdf::internals::Diagnostics;
 use proptest::prelude::*;
 use support::{
     direction, random_disk, random_equatorial, random_isotropic_disk, random_isotropic_equatorial,
     random_isotropic_sphere, random_sphere, rel,
 };
 
-/// Allowed relative difference between `pdf(wi, wo)` and the sampled PDF.
-const PDF_TOL: f32 = 1e-4;
+/// Allowed relative difference between `pdf(wi, wo)` and the sampled PDF, or, where one
+/// f32 rounding of `wo` or `x0` moves the density by more than that (sharply compressing
+/// random flows), the rounding allowance the shipped-model tests use
+/// (`Diagnostics::pdf_consistent`, its estimate taken at the model's default N).
+const PDF_TOL: f32 = diffbsdf::spec::PDF_CONSISTENCY_TOL;
 
 macro_rules! consistency {
     ($name:ident, $model:ident, $upper:expr) => {
@@ -30,9 +34,15 @@ macro_rules! consistency {
                     Some(s) => {
                         prop_assert_eq!(dir, Some(s.wo));
                         let back = m.pdf_steps(wi, s.wo, steps);
+                        let mut points = vec![[0.0f32; 2]; steps as usize + 1];
+                        prop_assert!(m.trajectory(wi, u, steps, &mut points).is_some());
+                        let x0 = points[0];
                         prop_assert!(
-                            rel(back, s.pdf, 0.0) <= PDF_TOL,
-                            "sampled pdf {} but pdf() gives {} (rel {})", s.pdf, back, rel(back, s.pdf, 0.0)
+                            rel(back, s.pdf, 0.0) <= PDF_TOL
+                                || m.pdf_consistent(wi, s.wo, s.pdf, back, x0),
+                            "sampled pdf {} but pdf() gives {} (rel {}, rounding allows {})",
+                            s.pdf, back, rel(back, s.pdf, 0.0),
+                            diffbsdf::spec::PDF_ROUNDING_SPAN * m.pdf_rounding(wi, s.wo, back, x0)
                         );
                     }
                     // Direction-only validity is geometric; with invertible steps and finite
