@@ -573,6 +573,20 @@ pub unsafe extern "C" fn diffbsdf_pdf_batch_parallel(
     })
 }
 
+/// Row `i` of two input arrays holding `A` and `B` floats per row.
+///
+/// # Safety
+/// Row `i` lies within both arrays.
+#[inline(always)]
+unsafe fn row_inputs<const A: usize, const B: usize>(
+    a: *const f32,
+    b: *const f32,
+    i: usize,
+) -> Result<([f32; A], [f32; B]), S> {
+    // SAFETY: forwarded contract.
+    unsafe { Ok((read::<A>(a.add(A * i))?, read::<B>(b.add(B * i))?)) }
+}
+
 /// The rows of a `sample_direction` batch: pointers checked by the caller, valid for the
 /// batch's `count` rows for the whole call (the header's contract).
 struct DirectionRows<'a> {
@@ -588,12 +602,7 @@ impl Rows for DirectionRows<'_> {
     fn row(&self, i: usize) -> Result<(), S> {
         // SAFETY: `i < count`: within every buffer (the header's contract); each thread
         // writes only its own rows.
-        let (a, b) = unsafe {
-            (
-                read::<3>(self.wi.add(3 * i))?,
-                read::<2>(self.u.add(2 * i))?,
-            )
-        };
+        let (a, b) = unsafe { row_inputs::<3, 2>(self.wi, self.u, i) }?;
         let d = self
             .model
             .sample_direction_steps(Vec3::from(a), Vec2::from(b), self.steps);
@@ -616,12 +625,7 @@ impl Rows for SampleRows<'_> {
     fn row(&self, i: usize) -> Result<(), S> {
         // SAFETY: `i < count`: within every buffer (the header's contract); each thread
         // writes only its own rows.
-        let (a, b) = unsafe {
-            (
-                read::<3>(self.wi.add(3 * i))?,
-                read::<2>(self.u.add(2 * i))?,
-            )
-        };
+        let (a, b) = unsafe { row_inputs::<3, 2>(self.wi, self.u, i) }?;
         let s = to_c(
             self.model
                 .sample_steps(Vec3::from(a), Vec2::from(b), self.steps),
@@ -646,12 +650,7 @@ impl Rows for PdfRows<'_> {
     fn row(&self, i: usize) -> Result<(), S> {
         // SAFETY: `i < count`: within every buffer (the header's contract); each thread
         // writes only its own rows.
-        let (a, b) = unsafe {
-            (
-                read::<3>(self.wi.add(3 * i))?,
-                read::<3>(self.wo.add(3 * i))?,
-            )
-        };
+        let (a, b) = unsafe { row_inputs::<3, 3>(self.wi, self.wo, i) }?;
         let p = self
             .model
             .pdf_steps(Vec3::from(a), Vec3::from(b), self.steps);
