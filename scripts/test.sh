@@ -50,7 +50,7 @@ objdump -d target/baseline/release/libdiffbsdf_ffi.a | awk '
     if (!selected) { print "baseline C library: no AVX2 copy of the kernel"; exit 1 }
   }'
 # Its AVX2 copy gives the same bits as its baseline copy (built here for baseline x86-64).
-env -u RUSTFLAGS CARGO_TARGET_DIR=target/baseline cargo test --release -p diffbsdf-ffi --test parallel
+env -u RUSTFLAGS CARGO_TARGET_DIR=target/baseline cargo test --release -p diffbsdf-ffi --test parallel --test slices
 echo "== docs";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p diffbsdf -p diffbsdf-ffi -p diffbsdf-codegen
 echo "== tests";   cargo test --release --workspace
 # The kernel's input-facing tests once more without --release: debug assertions and

@@ -14,11 +14,13 @@
 //! for AVX2 where the CPU has it (same bits, about twice the speed of baseline x86-64).
 //! Rows are read and written element by element through raw pointers, so an output buffer
 //! may even alias an input buffer of the same layout; the `_parallel` forms split the batch
-//! into contiguous ranges, one per thread.
+//! into contiguous ranges, one per thread. [`slices`] offers the same row loop to Rust
+//! callers over slices (the Python package).
 #![allow(non_camel_case_types)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
 mod parallel;
+pub mod slices;
 mod status;
 
 use diffbsdf::{AnyModel, NAME_CAPACITY};

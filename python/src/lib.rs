@@ -3,7 +3,9 @@
 //! Batch methods take C-contiguous float32 numpy arrays of shape `(N, 3)` (directions) and
 //! `(N, 2)` (random numbers), read them in place (no copy), release the GIL and split the
 //! batch over threads (`std::thread::scope`, one contiguous chunk per thread). Outputs are
-//! new numpy arrays written in place by the kernel's batch functions. The friendlier
+//! new numpy arrays written in place by the C library's slice batch functions
+//! (`diffbsdf_ffi::slices`: the kernel's batch loop, run in its AVX2 copy where the CPU has
+//! AVX2, the same bits as the kernel's own batch functions). The friendlier
 //! conversions (any float dtype, non-contiguous input) live in the Python wrapper
 //! `diffbsdf/__init__.py`; this module rejects anything else with a clear exception.
 //!
@@ -14,6 +16,7 @@ mod material;
 
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::{AnyModel, BatchError, BlobError, Domain, Precision, Sample};
+use diffbsdf_ffi::slices;
 use diffbsdf_materials::rgl::RglError;
 use diffbsdf_materials::SpecError;
 use numpy::ndarray::{Array1, Array2};
@@ -331,7 +334,7 @@ impl RawModel {
                 |start, mut out| {
                     let out = out.pop().unwrap_or_default();
                     let end = start + out.len();
-                    model.sample_batch(&wi_s[start..end], &u_s[start..end], steps, out)
+                    slices::sample_batch(model, &wi_s[start..end], &u_s[start..end], steps, out)
                 },
             )
         })?;
@@ -378,7 +381,13 @@ impl RawModel {
                 let out = out.pop().unwrap_or_default();
                 let out: &mut [Vec3] = bytemuck::cast_slice_mut(out);
                 let end = start + out.len();
-                model.sample_direction_batch(&wi_s[start..end], &u_s[start..end], steps, out)
+                slices::sample_direction_batch(
+                    model,
+                    &wi_s[start..end],
+                    &u_s[start..end],
+                    steps,
+                    out,
+                )
             })
         })?;
         let valid: Array1<bool> = wo
@@ -414,7 +423,7 @@ impl RawModel {
             split(n, threads, vec![pdf_flat], |start, mut out| {
                 let out = out.pop().unwrap_or_default();
                 let end = start + out.len();
-                model.pdf_batch(&wi_s[start..end], &wo_s[start..end], steps, out)
+                slices::pdf_batch(model, &wi_s[start..end], &wo_s[start..end], steps, out)
             })
         })?;
         Ok(pdf.into_pyarray(py))

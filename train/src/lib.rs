@@ -6,7 +6,8 @@
 //!   a teacher velocity net by flow matching, reflow pairs from the teacher, the kernel-
 //!   shaped student on those straight pairs, and export as a kernel blob. Every net is
 //!   laid out by the kernel's `ModelDef`; forward and backward passes are hand-written
-//!   ([`mlp`]) and batched over both cores ([`batch`]); the inputs are built with the
+//!   ([`mlp`] one row at a time, the reference; [`block`] a chunk of rows layer by layer,
+//!   the same bits, what training runs) and batched over both cores ([`batch`]); the inputs are built with the
 //!   kernel's own encoding, domain maps and activation, so the exported blob evaluates in
 //!   the kernel as it did in training.
 //! - [`metrics`]: relative variance, fireflies, KL divergence, PDF consistency and cost of
@@ -19,6 +20,7 @@
 pub mod adam;
 pub mod base_fit;
 pub mod batch;
+pub mod block;
 pub mod data;
 pub mod dataset;
 pub mod error;

@@ -30,11 +30,15 @@ pub struct Tape {
 
 /// Offsets of layer `l`'s weights and biases in the parameter vector.
 #[derive(Clone, Copy, Debug)]
-struct LayerAt {
-    n_in: usize,
-    n_out: usize,
-    w: usize,
-    b: usize,
+pub(crate) struct LayerAt {
+    /// Inputs (columns of `W`).
+    pub(crate) n_in: usize,
+    /// Outputs (rows of `W`, entries of `b`).
+    pub(crate) n_out: usize,
+    /// Offset of `W` (row-major `[out][in]`).
+    pub(crate) w: usize,
+    /// Offset of `b`.
+    pub(crate) b: usize,
 }
 
 /// The layers of `net` in `def`, first hidden layer to read-out.
@@ -103,7 +107,8 @@ impl Mlp {
         }
     }
 
-    fn layer(&self, l: usize) -> LayerAt {
+    /// Where layer `l`'s parameters sit.
+    pub(crate) fn layer(&self, l: usize) -> LayerAt {
         let off: usize = self.layers[..l].iter().map(Layer::param_count).sum();
         let (n_in, n_out) = (self.layers[l].inputs, self.layers[l].outputs);
         LayerAt {
@@ -217,7 +222,7 @@ fn axpy(a: f32, x: &[f32], y: &mut [f32]) {
 
 /// Dot product with 8 interleaved partial sums (vectorises without reassociation).
 #[inline]
-fn dot(a: &[f32], b: &[f32]) -> f32 {
+pub(crate) fn dot(a: &[f32], b: &[f32]) -> f32 {
     let mut acc = [0.0f32; 8];
     let mut ca = a.chunks_exact(8);
     let mut cb = b.chunks_exact(8);
@@ -229,6 +234,12 @@ fn dot(a: &[f32], b: &[f32]) -> f32 {
     for (l, (x, y)) in ca.remainder().iter().zip(cb.remainder()).enumerate() {
         acc[l] += x * y;
     }
+    reduce8(&acc)
+}
+
+/// The sum of [`dot`]'s 8 partial sums, in its fixed order.
+#[inline(always)]
+pub(crate) fn reduce8(acc: &[f32; 8]) -> f32 {
     ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]))
 }
 

@@ -2,9 +2,10 @@
 //! endpoint from `x0` (classical RK4, `steps` steps, i.e. `4 steps` teacher evaluations,
 //! more accurate than as many Euler steps), so the student learns straight paths.
 
+use crate::block::Block;
 use crate::dataset::TrainingSet;
 use crate::features::push_velocity_row;
-use crate::mlp::{Mlp, Tape};
+use crate::mlp::Mlp;
 use diffbsdf::internals::base::BaseDist;
 use diffbsdf::ModelDef;
 use rand::Rng;
@@ -37,55 +38,62 @@ pub fn reflow_pairs(
     starts
         .par_chunks(512)
         .flat_map_iter(|chunk| {
-            let mut tape = Tape::default();
-            let mut row = Vec::with_capacity(teacher.inputs());
-            let out: Vec<_> = chunk
-                .iter()
-                .map(|&(i, x0)| {
-                    let enc = data.encoding(i as usize, def.velocity.freqs);
-                    let x1 = integrate(teacher, def, x0, enc, steps, &mut tape, &mut row);
-                    (i, x0, x1)
-                })
-                .collect();
+            let mut block = Block::default();
+            let x1 = integrate(teacher, def, data, chunk, steps, &mut block);
             progress(chunk.len());
-            out.into_iter()
+            chunk
+                .iter()
+                .zip(x1)
+                .map(|(&(i, x0), x1)| (i, x0, x1))
+                .collect::<Vec<_>>()
         })
         .collect()
 }
 
-/// The teacher's ODE from `t = 0` to 1 by RK4.
+/// The teacher's ODE from `t = 0` to 1 by RK4, for a chunk of start points at once
+/// (each evaluation of the teacher is one [`Block`] pass over the chunk; every trajectory
+/// is computed exactly as it would be alone).
 fn integrate(
     net: &Mlp,
     def: &ModelDef,
-    x0: [f32; 2],
-    enc: &[f32],
+    data: &TrainingSet,
+    starts: &[(u32, [f32; 2])],
     steps: usize,
-    tape: &mut Tape,
-    row: &mut Vec<f32>,
-) -> [f32; 2] {
+    block: &mut Block,
+) -> Vec<[f32; 2]> {
     let domain = def.domain;
     let h = 1.0 / steps.max(1) as f32;
-    let mut v = |x: [f32; 2], t: f32| -> [f32; 2] {
-        row.clear();
-        push_velocity_row(def, x, t, enc, row);
-        let o = net.forward_tape(row, tape);
-        [o[0], o[1]]
+    let mut rows = Vec::with_capacity(starts.len() * net.inputs());
+    let mut v = |points: &[[f32; 2]], t: f32| -> Vec<[f32; 2]> {
+        rows.clear();
+        for (x, &(i, _)) in points.iter().zip(starts) {
+            let enc = data.encoding(i as usize, def.velocity.freqs);
+            push_velocity_row(def, *x, t, enc, &mut rows);
+        }
+        block
+            .forward(net, &rows)
+            .chunks_exact(net.outputs())
+            .map(|o| [o[0], o[1]])
+            .collect()
     };
-    let mut x = x0;
+    // x + s k, the point where RK4 evaluates its next stage.
+    let step = |x: &[[f32; 2]], k: &[[f32; 2]], s: f32| -> Vec<[f32; 2]> {
+        x.iter()
+            .zip(k)
+            .map(|(x, k)| domain.advance(*x, [s * k[0], s * k[1]]))
+            .collect()
+    };
+    let mut x: Vec<[f32; 2]> = starts.iter().map(|s| s.1).collect();
     for k in 0..steps.max(1) {
         let t = k as f32 * h;
-        let k1 = v(x, t);
-        let k2 = v(
-            domain.advance(x, [0.5 * h * k1[0], 0.5 * h * k1[1]]),
-            t + 0.5 * h,
-        );
-        let k3 = v(
-            domain.advance(x, [0.5 * h * k2[0], 0.5 * h * k2[1]]),
-            t + 0.5 * h,
-        );
-        let k4 = v(domain.advance(x, [h * k3[0], h * k3[1]]), t + h);
-        let d = |c: usize| h / 6.0 * (k1[c] + 2.0 * k2[c] + 2.0 * k3[c] + k4[c]);
-        x = domain.advance(x, [d(0), d(1)]);
+        let k1 = v(&x, t);
+        let k2 = v(&step(&x, &k1, 0.5 * h), t + 0.5 * h);
+        let k3 = v(&step(&x, &k2, 0.5 * h), t + 0.5 * h);
+        let k4 = v(&step(&x, &k3, h), t + h);
+        for (j, xj) in x.iter_mut().enumerate() {
+            let d = |c: usize| h / 6.0 * (k1[j][c] + 2.0 * k2[j][c] + 2.0 * k3[j][c] + k4[j][c]);
+            *xj = domain.advance(*xj, [d(0), d(1)]);
+        }
     }
     x
 }
