@@ -267,7 +267,13 @@ fn main() {
                 };
                 let code = generate(&blob, &options).expect("generate");
                 // The material's offset in the buffer: 0 (it is the only one).
-                gpu.pipeline(&gpu.wgsl(&wgsl_compute(&code, e, !a.baked, 0)))
+                let start = std::time::Instant::now();
+                let p = gpu.pipeline(&gpu.wgsl(&wgsl_compute(&code, e, !a.baked, 0)));
+                eprintln!(
+                    "{label} {name} {e:?}: pipeline compiled in {:.1} s",
+                    start.elapsed().as_secs_f64()
+                );
+                p
             };
             let sample = pipeline(EntryPoints {
                 direction: false,

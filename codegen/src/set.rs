@@ -42,6 +42,12 @@ pub struct SetCode {
     pub buffers: Vec<GroupBuffer>,
 }
 
+/// Whether code generated for `a` also serves `b` with `b`'s weights in buffer mode
+/// (everything the generated code depends on besides the weights and the default steps).
+pub fn same_architecture(a: &ModelDef, b: &ModelDef) -> bool {
+    architecture(a) == architecture(b)
+}
+
 /// The part of a definition the generated code depends on besides the weights.
 fn architecture(d: &ModelDef) -> impl PartialEq {
     (

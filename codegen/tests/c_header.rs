@@ -178,10 +178,7 @@ fn generated_c_matches_kernel() {
                     assert_eq!(e.valid, 0, "{}: a sample above MAX_STEPS", model.name);
                     continue;
                 }
-                total.max_dir = total.max_dir.max(e.max_dir);
-                total.max_pdf_rel = total.max_pdf_rel.max(e.max_pdf_rel);
-                total.compared += e.compared;
-                total.valid += e.valid;
+                total.merge(&e);
             }
         }
     }

@@ -13,6 +13,10 @@ use diffbsdf::internals::base::BaseDist;
 use diffbsdf::ModelDef;
 use rand::Rng;
 use rand_pcg::Pcg64;
+use rayon::prelude::*;
+
+/// Rows of a batch built per parallel task.
+const ROWS_PER_TASK: usize = 256;
 
 /// Settings of one flow-matching run (the net's shape is its model definition's).
 #[derive(Clone, Copy, Debug)]
@@ -46,18 +50,43 @@ pub enum Coupling<'a> {
     },
 }
 
-impl Coupling<'_> {
-    fn draw(&self, data: &TrainingSet, rng: &mut Pcg64) -> (usize, [f32; 2], [f32; 2]) {
-        match self {
+/// One row's random draws, made serially from the run's generator (they fix the bits);
+/// [`Draw::resolve`] does the rest of the work, in parallel.
+#[derive(Clone, Copy, Debug)]
+enum Draw<'a> {
+    /// Data row `i`, its base distribution and the uniform numbers of its `x0`.
+    Independent {
+        i: usize,
+        base: &'a BaseDist,
+        u: [f32; 2],
+    },
+    /// A fixed pair.
+    Fixed((u32, [f32; 2], [f32; 2])),
+}
+
+impl<'a> Coupling<'a> {
+    fn draw(&self, data: &TrainingSet, rng: &mut Pcg64) -> Draw<'a> {
+        match *self {
             Coupling::Independent { base } => {
                 let i = rng.gen_range(0..data.len());
                 let u = [rng.gen::<f32>(), rng.gen::<f32>()];
-                (i, base[i].sample(u), data.x1[i])
+                Draw::Independent {
+                    i,
+                    base: &base[i],
+                    u,
+                }
             }
-            Coupling::Fixed { pairs } => {
-                let (i, x0, x1) = pairs[rng.gen_range(0..pairs.len())];
-                (i as usize, x0, x1)
-            }
+            Coupling::Fixed { pairs } => Draw::Fixed(pairs[rng.gen_range(0..pairs.len())]),
+        }
+    }
+}
+
+impl Draw<'_> {
+    /// `(wi index, x0, x1)`.
+    fn resolve(self, data: &TrainingSet) -> (usize, [f32; 2], [f32; 2]) {
+        match self {
+            Draw::Independent { i, base, u } => (i, base.sample(u), data.x1[i]),
+            Draw::Fixed((i, x0, x1)) => (i as usize, x0, x1),
         }
     }
 }
@@ -77,25 +106,42 @@ pub fn train_flow(
     let freqs = def.velocity.freqs;
     let mut adam = Adam::new(net.params().len());
     let batch = cfg.batch.max(1);
-    let mut inputs = Vec::with_capacity(batch * net.inputs());
+    let n_in = net.inputs();
+    let mut inputs = Vec::with_capacity(batch * n_in);
     let mut targets = Vec::with_capacity(batch);
+    let mut draws = Vec::with_capacity(batch);
     let mut ema = net.params().to_vec();
     for it in 0..cfg.iters {
-        inputs.clear();
-        targets.clear();
+        // The random numbers in order (they fix the bits), then the rows in parallel.
+        draws.clear();
         for b in 0..batch {
-            let (i, x0, x1) = coupling.draw(data, rng);
+            let d = coupling.draw(data, rng);
             // t stratified: one uniform draw per stratum [b/B, (b+1)/B), or the Euler times.
             let t = if cfg.t_grid > 0 {
                 (b % cfg.t_grid) as f32 / cfg.t_grid as f32
             } else {
                 (b as f32 + rng.gen::<f32>()) / batch as f32
             };
-            let xt = interpolate(domain, x0, x1, t);
-            push_velocity_row(def, xt, t, data.encoding(i, freqs), &mut inputs);
-            // The target velocity x1 - x0 (phi the short way round).
-            targets.push(domain.difference(x1, x0));
+            draws.push((d, t));
         }
+        inputs.resize(batch * n_in, 0.0);
+        targets.resize(batch, [0.0; 2]);
+        inputs
+            .par_chunks_mut(ROWS_PER_TASK * n_in)
+            .zip(targets.par_chunks_mut(ROWS_PER_TASK))
+            .zip(draws.par_chunks(ROWS_PER_TASK))
+            .for_each(|((rows, target), draws)| {
+                let mut row = Vec::with_capacity(n_in);
+                for ((dst, target), &(d, t)) in rows.chunks_exact_mut(n_in).zip(target).zip(draws) {
+                    let (i, x0, x1) = d.resolve(data);
+                    let xt = interpolate(domain, x0, x1, t);
+                    row.clear();
+                    push_velocity_row(def, xt, t, data.encoding(i, freqs), &mut row);
+                    dst.copy_from_slice(&row);
+                    // The target velocity x1 - x0 (phi the short way round).
+                    *target = domain.difference(x1, x0);
+                }
+            });
         let scale = 1.0 / batch as f32;
         let (loss, grad) = loss_and_grad(net, &inputs, |r, v, d| {
             // eq. 3: |v - (x1 - x0)|^2, gradient 2 (v - (x1 - x0)) / B

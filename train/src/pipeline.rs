@@ -24,7 +24,7 @@ pub const STANDARD_PAIRS: usize = 400_000;
 /// Teacher width of [`FitConfig::standard`] (4 hidden layers, as [`FitConfig::quick`]).
 pub const STANDARD_TEACHER_WIDTH: u16 = 96;
 /// Teacher iterations of [`FitConfig::standard`].
-pub const STANDARD_TEACHER_ITERS: usize = 24_000;
+pub const STANDARD_TEACHER_ITERS: usize = 48_000;
 
 /// Everything that determines a fit (with the seed).
 #[derive(Clone, Copy, Debug)]
@@ -65,10 +65,11 @@ pub struct FitConfig {
 
 impl FitConfig {
     /// The defaults for `domain` (what `diffbsdf fit` runs): the paper's student shapes
-    /// and [`FitConfig::quick`]'s stages, with a larger teacher trained twice as long on
-    /// twice the pairs. The teacher's capacity is what limits measured materials (the
+    /// and [`FitConfig::quick`]'s stages, with a larger teacher trained four times as long
+    /// on twice the pairs. The teacher's capacity and training is what limits measured materials (the
     /// reflowed student matches its teacher: its loss ends near 4e-4 and 16 steps sample
-    /// no better than 8); measured in `docs/measured-materials.md`.
+    /// no better than 8); measured in `docs/measured-materials.md`. About 11 minutes on
+    /// the 2-core machine.
     pub fn standard(domain: Domain, seed: u64) -> Self {
         Self::for_def(paper_def(domain), seed)
     }

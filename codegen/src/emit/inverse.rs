@@ -49,8 +49,25 @@ impl Emitter<'_> {
         self.end_fn();
     }
 
+    /// `(a', b') = (a - l d0, b - l d1)` (phi wrapped), as one statement.
+    fn step_to(&mut self, a: &str, b: &str, l: &str) {
+        self.code.line(format!("{a} = a - {l}d0;"));
+        if self.sphere() {
+            let w = self.call("wrap", false, &[&format!("b - {l}d1")]);
+            self.code.line(format!("{b} = {w};"));
+        } else {
+            self.code.line(format!("{b} = b - {l}d1;"));
+        }
+    }
+
     /// The kernel's `newton`: Newton steps where `I + h dv/dx` is orientation preserving,
     /// fixed-point steps where it is not, each with a backtracking line search.
+    ///
+    /// Written as one loop around a single `residual` call: the start point, each
+    /// line-search trial and the converged point's determinant are the same call site, as
+    /// a state (`mode`) says which one is due. Shader compilers inline every call, so the
+    /// kernel's three call sites would be three copies of the Jacobian; the arithmetic and
+    /// the order of evaluations are the kernel's.
     pub(super) fn newton(&mut self) {
         self.code.line(
             "// Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,",
@@ -61,6 +78,10 @@ impl Emitter<'_> {
         self.code.line(format!(
             "// half, ..., at most {LINE_SEARCH_HALVINGS} halvings) to the first that shrinks the residual."
         ));
+        self.code.line(
+            "// One residual call site: mode 0 evaluates the start, 1 a line-search trial, 2 the",
+        );
+        self.code.line("// converged point.");
         let cond = self.st("Cond");
         let root = self.st("Root");
         let mut ps = vec![(cond, "cond")];
@@ -72,60 +93,34 @@ impl Emitter<'_> {
         let tol = self.f(self.newton_tol());
         let decl = self.d.decl(&root, "x", None);
         self.code.line(decl);
-        self.code.line(format!("x.a = {zero};"));
-        self.code.line(format!("x.b = {zero};"));
-        self.code.line(format!("x.det = {zero};"));
-        self.code.line(format!("x.va = {zero};"));
-        self.code.line(format!("x.vb = {zero};"));
+        for c in ["a", "b", "det", "va", "vb"] {
+            self.code.line(format!("x.{c} = {zero};"));
+        }
         self.decl(T::F, "a", "xa");
         self.decl(T::F, "b", "xb");
-        let res = self.call("residual", true, &["cond", "t", "h", "ya", "yb", "a", "b"]);
-        self.decl(self.st("Residual"), "at", &res);
+        // The point the next residual is taken at.
+        self.decl(T::F, "pa", "xa");
+        self.decl(T::F, "pb", "xb");
+        for v in ["d0", "d1", "size", "scale", "norm"] {
+            self.decl(T::F, v, &zero);
+        }
+        self.decl(T::F, "lambda", &one);
+        self.decl(T::U, "mode", &self.u(0));
+        self.decl(T::U, "it", &self.u(0));
+        self.decl(T::U, "ls", &self.u(0));
         let abs = |s: &Self, x: &str| s.math(Math::Abs, x);
         let mx = self.d.math(Math::Max);
-        self.for_open("it", &self.u(NEWTON_MAX_ITERS as usize));
-        self.decl(T::F, "d0", "at.r0");
-        self.decl(T::F, "d1", "at.r1");
-        self.code.open(format!("if (at.det > {zero}) {{"));
-        self.code.line("// d = (I + h J)^-1 r by the 2x2 adjugate.");
-        self.code.line(format!(
-            "d0 = (({one} + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;"
-        ));
-        self.code.line(format!(
-            "d1 = (({one} + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;"
-        ));
-        self.code.close("}");
-        let size = format!("{mx}({}, {})", abs(self, "d0"), abs(self, "d1"));
-        self.decl(T::F, "size", &size);
-        self.code
-            .open(format!("if (!{}) {{", self.d.finite("size")));
-        self.code.line("return x;");
-        self.code.close("}");
-        let scale = format!("{one} + {mx}({}, {})", abs(self, "a"), abs(self, "b"));
-        self.decl(T::F, "scale", &scale);
-        self.code.open(format!("if (size <= {tol} * scale) {{"));
-        self.code.line(
-            "// Converged: the update is below the f32 noise of x + h v(x); det is taken at the",
-        );
-        self.code.line(
-            "// returned point, where the forward pass takes it (at x itself where the update",
-        );
-        self.code.line("// rounds away).");
-        self.code.line("x.a = a - d0;");
-        if self.sphere() {
-            let w = self.call("wrap", false, &["b - d1"]);
-            self.code.line(format!("x.b = {w};"));
-        } else {
-            self.code.line("x.b = b - d1;");
-        }
-        self.code.open("if (x.a != a || x.b != b) {");
-        let fin = self.call(
+        let iters = NEWTON_MAX_ITERS as usize;
+        let evaluations = 2 + iters * (LINE_SEARCH_HALVINGS as usize + 1);
+        self.for_open("k", &self.u(evaluations));
+        let res = self.call(
             "residual",
             true,
-            &["cond", "t", "h", "ya", "yb", "x.a", "x.b"],
+            &["cond", "t", "h", "ya", "yb", "pa", "pb"],
         );
-        self.code.line(format!("at = {fin};"));
-        self.code.close("}");
+        self.decl(self.st("Residual"), "at", &res);
+        // mode 2: the converged point's determinant and velocity.
+        self.code.open(format!("if (mode == {}) {{", self.u(2)));
         self.code.open(format!("if (at.det > {zero}) {{"));
         self.code.line("x.det = at.det;");
         self.code.line("x.va = at.v0;");
@@ -133,36 +128,20 @@ impl Emitter<'_> {
         self.code.close("}");
         self.code.line("return x;");
         self.code.close("}");
-        let norm = format!("{mx}({}, {})", abs(self, "at.r0"), abs(self, "at.r1"));
-        self.decl(T::F, "norm", &norm);
-        self.decl(T::F, "lambda", &one);
-        self.decl(T::F, "ta", "a");
-        self.decl(T::F, "tb", "b");
-        self.for_open("ls", &self.u(LINE_SEARCH_HALVINGS as usize + 1));
-        self.code.line("ta = a - lambda * d0;");
-        if self.sphere() {
-            let w = self.call("wrap", false, &["b - lambda * d1"]);
-            self.code.line(format!("tb = {w};"));
-        } else {
-            self.code.line("tb = b - lambda * d1;");
-        }
-        let res = self.call(
-            "residual",
-            true,
-            &["cond", "t", "h", "ya", "yb", "ta", "tb"],
-        );
-        self.code.line(format!("at = {res};"));
+        // mode 1: a line-search trial; halve again, or take the step.
+        self.code.open(format!("if (mode == {}) {{", self.u(1)));
         let next = format!("{mx}({}, {})", abs(self, "at.r0"), abs(self, "at.r1"));
         let last = self.u(LINE_SEARCH_HALVINGS as usize);
         self.code
-            .open(format!("if ({next} < norm || ls == {last}) {{"));
-        self.code.line("break;");
-        self.code.close("}");
+            .open(format!("if (!({next} < norm || ls == {last})) {{"));
         self.code
             .line(format!("lambda = lambda * {};", self.f(0.5)));
+        self.code.line(format!("ls = ls + {};", self.u(1)));
+        self.step_to("pa", "pb", "lambda * ");
+        self.code.line("continue;");
         self.code.close("}");
-        self.code.line("a = ta;");
-        self.code.line("b = tb;");
+        self.code.line("a = pa;");
+        self.code.line("b = pb;");
         self.code.open(format!(
             "if (lambda * size <= {tol} * scale && at.det > {zero}) {{"
         ));
@@ -175,6 +154,68 @@ impl Emitter<'_> {
         self.code.line("x.vb = at.v1;");
         self.code.line("return x;");
         self.code.close("}");
+        self.code.line(format!("it = it + {};", self.u(1)));
+        self.code.open(format!("if (it == {}) {{", self.u(iters)));
+        self.code.line("return x;");
+        self.code.close("}");
+        self.code.close("}");
+        // A Newton iteration from (a, b), whose residual is `at`.
+        self.code.line("d0 = at.r0;");
+        self.code.line("d1 = at.r1;");
+        self.code.open(format!("if (at.det > {zero}) {{"));
+        self.code.line("// d = (I + h J)^-1 r by the 2x2 adjugate.");
+        self.code.line(format!(
+            "d0 = (({one} + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;"
+        ));
+        self.code.line(format!(
+            "d1 = (({one} + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;"
+        ));
+        self.code.close("}");
+        self.code.line(format!(
+            "size = {mx}({}, {});",
+            abs(self, "d0"),
+            abs(self, "d1")
+        ));
+        self.code
+            .open(format!("if (!{}) {{", self.d.finite("size")));
+        self.code.line("return x;");
+        self.code.close("}");
+        self.code.line(format!(
+            "scale = {one} + {mx}({}, {});",
+            abs(self, "a"),
+            abs(self, "b")
+        ));
+        self.code.open(format!("if (size <= {tol} * scale) {{"));
+        self.code.line(
+            "// Converged: the update is below the f32 noise of x + h v(x); det is taken at the",
+        );
+        self.code.line(
+            "// returned point, where the forward pass takes it (at x itself where the update",
+        );
+        self.code.line("// rounds away).");
+        self.step_to("x.a", "x.b", "");
+        self.code.open("if (x.a != a || x.b != b) {");
+        self.code.line("pa = x.a;");
+        self.code.line("pb = x.b;");
+        self.code.line(format!("mode = {};", self.u(2)));
+        self.code.line("continue;");
+        self.code.close("}");
+        self.code.open(format!("if (at.det > {zero}) {{"));
+        self.code.line("x.det = at.det;");
+        self.code.line("x.va = at.v0;");
+        self.code.line("x.vb = at.v1;");
+        self.code.close("}");
+        self.code.line("return x;");
+        self.code.close("}");
+        self.code.line(format!(
+            "norm = {mx}({}, {});",
+            abs(self, "at.r0"),
+            abs(self, "at.r1")
+        ));
+        self.code.line(format!("lambda = {one};"));
+        self.code.line(format!("ls = {};", self.u(0)));
+        self.step_to("pa", "pb", "");
+        self.code.line(format!("mode = {};", self.u(1)));
         self.code.close("}");
         self.code.line("return x;");
         self.end_fn();
@@ -182,7 +223,8 @@ impl Emitter<'_> {
 
     /// The kernel's `invert_step`: Newton from `y - h v_next` (the velocity where the
     /// trajectory is at the next time), then (rarely needed) from `y - h v(y)`, from one
-    /// fixed-point iterate further and from `y - h v(y) / 2`.
+    /// fixed-point iterate further and from `y - h v(y) / 2`. One loop over the starts
+    /// around a single `newton` and a single `velocity` call (see [`Self::newton`]).
     pub(super) fn invert_step(&mut self) {
         self.code.line(
             "// The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next",
@@ -197,49 +239,50 @@ impl Emitter<'_> {
         ps.extend([(T::F, "va"), (T::F, "vb")]);
         self.fn_open(root.clone(), "invert_step", true, &ps);
         let zero = self.f(0.0);
-        let start = |s: &Self, scale: &str, va: &str, vb: &str| -> (String, String) {
-            let a = format!("ya - {scale}h * {va}");
-            let b = if s.sphere() {
-                s.call("wrap", false, &[&format!("yb - {scale}h * {vb}")])
+        let wrap = |s: &Self, x: String| -> String {
+            if s.sphere() {
+                s.call("wrap", false, &[&x])
             } else {
-                format!("yb - {scale}h * {vb}")
-            };
-            (a, b)
+                x
+            }
         };
-        let (an, bn) = start(self, "", "va", "vb");
-        self.decl(T::F, "an", &an);
-        self.decl(T::F, "bn", &bn);
-        let nn = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "an", "bn"]);
-        self.decl(root.clone(), "x", &nn);
-        self.code.open(format!("if (x.det > {zero}) {{"));
-        self.code.line("return x;");
-        self.code.close("}");
-        let v = self.call("velocity", true, &["cond", "t", "ya", "yb"]);
+        self.decl(T::F, "sa", "ya - h * va");
+        self.decl(T::F, "sb", &wrap(self, "yb - h * vb".to_owned()));
+        // Where the next velocity is taken: y, then the second start.
+        self.decl(T::F, "qa", "ya");
+        self.decl(T::F, "qb", "yb");
+        self.decl(T::F, "vya", &zero);
+        self.decl(T::F, "vyb", &zero);
+        let decl = self.d.decl(&root, "x", None);
+        self.code.line(decl);
+        self.for_open("s", &self.u(4));
+        self.code
+            .open(format!("if (s == {} || s == {}) {{", self.u(1), self.u(2)));
+        let v = self.call("velocity", true, &["cond", "t", "qa", "qb"]);
         self.decl(self.st("Vec2"), "v", &v);
-        let (a0, b0) = start(self, "", "v.x", "v.y");
-        self.decl(T::F, "a0", &a0);
-        self.decl(T::F, "b0", &b0);
-        let n0 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a0", "b0"]);
-        self.code.line(format!("x = {n0};"));
+        self.code.open(format!("if (s == {}) {{", self.u(1)));
+        self.code.line("vya = v.x;");
+        self.code.line("vyb = v.y;");
+        self.code.close("}");
+        self.code.line("sa = ya - h * v.x;");
+        let sb = wrap(self, "yb - h * v.y".to_owned());
+        self.code.line(format!("sb = {sb};"));
+        self.code.line("qa = sa;");
+        self.code.line("qb = sb;");
+        self.code.close("}");
+        self.code.open(format!("if (s == {}) {{", self.u(3)));
+        let half = self.f(0.5);
+        self.code.line(format!("sa = ya - {half} * h * vya;"));
+        let sb = wrap(self, format!("yb - {half} * h * vyb"));
+        self.code.line(format!("sb = {sb};"));
+        self.code.close("}");
+        let n = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "sa", "sb"]);
+        self.code.line(format!("x = {n};"));
         self.code.open(format!("if (x.det > {zero}) {{"));
         self.code.line("return x;");
         self.code.close("}");
-        let v1 = self.call("velocity", true, &["cond", "t", "a0", "b0"]);
-        self.decl(self.st("Vec2"), "v1", &v1);
-        let (a1, b1) = start(self, "", "v1.x", "v1.y");
-        self.decl(T::F, "a1", &a1);
-        self.decl(T::F, "b1", &b1);
-        let n1 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a1", "b1"]);
-        self.code.line(format!("x = {n1};"));
-        self.code.open(format!("if (x.det > {zero}) {{"));
-        self.code.line("return x;");
         self.code.close("}");
-        let half = format!("{} * ", self.f(0.5));
-        let (a2, b2) = start(self, &half, "v.x", "v.y");
-        self.decl(T::F, "a2", &a2);
-        self.decl(T::F, "b2", &b2);
-        let n2 = self.call("newton", true, &["cond", "t", "h", "ya", "yb", "a2", "b2"]);
-        self.code.line(format!("return {n2};"));
+        self.code.line("return x;");
         self.end_fn();
     }
 

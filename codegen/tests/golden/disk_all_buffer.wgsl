@@ -463,6 +463,8 @@ fn diffbsdf_tiny_disk_residual(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32,
 // Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,
 // fixed-point steps where not; each step backtracks from the same point (full,
 // half, ..., at most 8 halvings) to the first that shrinks the residual.
+// One residual call site: mode 0 evaluates the start, 1 a line-search trial, 2 the
+// converged point.
 fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32, xa: f32, xb: f32) -> diffbsdf_tiny_disk_Root {
     var x: diffbsdf_tiny_disk_Root;
     x.a = 0.0f;
@@ -472,20 +474,63 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
     x.vb = 0.0f;
     var a: f32 = xa;
     var b: f32 = xb;
-    var at: diffbsdf_tiny_disk_Residual = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, a, b);
-    for (var it = 0u; it < 32u; it++) {
-        var d0: f32 = at.r0;
-        var d1: f32 = at.r1;
+    var pa: f32 = xa;
+    var pb: f32 = xb;
+    var d0: f32 = 0.0f;
+    var d1: f32 = 0.0f;
+    var size: f32 = 0.0f;
+    var scale: f32 = 0.0f;
+    var norm: f32 = 0.0f;
+    var lambda: f32 = 1.0f;
+    var mode: u32 = 0u;
+    var it: u32 = 0u;
+    var ls: u32 = 0u;
+    for (var k = 0u; k < 290u; k++) {
+        var at: diffbsdf_tiny_disk_Residual = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, pa, pb);
+        if (mode == 2u) {
+            if (at.det > 0.0f) {
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
+            }
+            return x;
+        }
+        if (mode == 1u) {
+            if (!(max(abs(at.r0), abs(at.r1)) < norm || ls == 8u)) {
+                lambda = lambda * 0.5f;
+                ls = ls + 1u;
+                pa = a - lambda * d0;
+                pb = b - lambda * d1;
+                continue;
+            }
+            a = pa;
+            b = pb;
+            if (lambda * size <= 1e-6f * scale && at.det > 0.0f) {
+                // The step just taken was below the noise: converged here.
+                x.a = a;
+                x.b = b;
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
+                return x;
+            }
+            it = it + 1u;
+            if (it == 32u) {
+                return x;
+            }
+        }
+        d0 = at.r0;
+        d1 = at.r1;
         if (at.det > 0.0f) {
             // d = (I + h J)^-1 r by the 2x2 adjugate.
             d0 = ((1.0f + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;
             d1 = ((1.0f + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;
         }
-        var size: f32 = max(abs(d0), abs(d1));
+        size = max(abs(d0), abs(d1));
         if (!((bitcast<u32>(size) & 0x7f800000u) != 0x7f800000u)) {
             return x;
         }
-        var scale: f32 = 1.0f + max(abs(a), abs(b));
+        scale = 1.0f + max(abs(a), abs(b));
         if (size <= 1e-6f * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it (at x itself where the update
@@ -493,7 +538,10 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
             x.a = a - d0;
             x.b = b - d1;
             if (x.a != a || x.b != b) {
-                at = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, x.a, x.b);
+                pa = x.a;
+                pb = x.b;
+                mode = 2u;
+                continue;
             }
             if (at.det > 0.0f) {
                 x.det = at.det;
@@ -502,30 +550,12 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
             }
             return x;
         }
-        var norm: f32 = max(abs(at.r0), abs(at.r1));
-        var lambda: f32 = 1.0f;
-        var ta: f32 = a;
-        var tb: f32 = b;
-        for (var ls = 0u; ls < 9u; ls++) {
-            ta = a - lambda * d0;
-            tb = b - lambda * d1;
-            at = diffbsdf_tiny_disk_residual(base, cond, t, h, ya, yb, ta, tb);
-            if (max(abs(at.r0), abs(at.r1)) < norm || ls == 8u) {
-                break;
-            }
-            lambda = lambda * 0.5f;
-        }
-        a = ta;
-        b = tb;
-        if (lambda * size <= 1e-6f * scale && at.det > 0.0f) {
-            // The step just taken was below the noise: converged here.
-            x.a = a;
-            x.b = b;
-            x.det = at.det;
-            x.va = at.v0;
-            x.vb = at.v1;
-            return x;
-        }
+        norm = max(abs(at.r0), abs(at.r1));
+        lambda = 1.0f;
+        ls = 0u;
+        pa = a - d0;
+        pb = b - d1;
+        mode = 1u;
     }
     return x;
 }
@@ -533,29 +563,35 @@ fn diffbsdf_tiny_disk_newton(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h
 // The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next
 // time; else from y - h v(y), one fixed-point iterate further, y - h v(y) / 2.
 fn diffbsdf_tiny_disk_invert_step(base: u32, cond: diffbsdf_tiny_disk_Cond, t: f32, h: f32, ya: f32, yb: f32, va: f32, vb: f32) -> diffbsdf_tiny_disk_Root {
-    var an: f32 = ya - h * va;
-    var bn: f32 = yb - h * vb;
-    var x: diffbsdf_tiny_disk_Root = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, an, bn);
-    if (x.det > 0.0f) {
-        return x;
+    var sa: f32 = ya - h * va;
+    var sb: f32 = yb - h * vb;
+    var qa: f32 = ya;
+    var qb: f32 = yb;
+    var vya: f32 = 0.0f;
+    var vyb: f32 = 0.0f;
+    var x: diffbsdf_tiny_disk_Root;
+    for (var s = 0u; s < 4u; s++) {
+        if (s == 1u || s == 2u) {
+            var v: diffbsdf_tiny_disk_Vec2 = diffbsdf_tiny_disk_velocity(base, cond, t, qa, qb);
+            if (s == 1u) {
+                vya = v.x;
+                vyb = v.y;
+            }
+            sa = ya - h * v.x;
+            sb = yb - h * v.y;
+            qa = sa;
+            qb = sb;
+        }
+        if (s == 3u) {
+            sa = ya - 0.5f * h * vya;
+            sb = yb - 0.5f * h * vyb;
+        }
+        x = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, sa, sb);
+        if (x.det > 0.0f) {
+            return x;
+        }
     }
-    var v: diffbsdf_tiny_disk_Vec2 = diffbsdf_tiny_disk_velocity(base, cond, t, ya, yb);
-    var a0: f32 = ya - h * v.x;
-    var b0: f32 = yb - h * v.y;
-    x = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, a0, b0);
-    if (x.det > 0.0f) {
-        return x;
-    }
-    var v1: diffbsdf_tiny_disk_Vec2 = diffbsdf_tiny_disk_velocity(base, cond, t, a0, b0);
-    var a1: f32 = ya - h * v1.x;
-    var b1: f32 = yb - h * v1.y;
-    x = diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, a1, b1);
-    if (x.det > 0.0f) {
-        return x;
-    }
-    var a2: f32 = ya - 0.5f * h * v.x;
-    var b2: f32 = yb - 0.5f * h * v.y;
-    return diffbsdf_tiny_disk_newton(base, cond, t, h, ya, yb, a2, b2);
+    return x;
 }
 
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's

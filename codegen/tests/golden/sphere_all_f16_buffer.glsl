@@ -456,6 +456,8 @@ diffbsdf_tiny_sphere_Residual diffbsdf_tiny_sphere_residual(uint base, diffbsdf_
 // Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0,
 // fixed-point steps where not; each step backtracks from the same point (full,
 // half, ..., at most 8 halvings) to the first that shrinks the residual.
+// One residual call site: mode 0 evaluates the start, 1 a line-search trial, 2 the
+// converged point.
 diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float xa, float xb) {
     precise diffbsdf_tiny_sphere_Root x;
     x.a = 0.0;
@@ -465,20 +467,63 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
     x.vb = 0.0;
     precise float a = xa;
     precise float b = xb;
-    precise diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, a, b);
-    for (uint it = 0u; it < 32u; it++) {
-        precise float d0 = at.r0;
-        precise float d1 = at.r1;
+    precise float pa = xa;
+    precise float pb = xb;
+    precise float d0 = 0.0;
+    precise float d1 = 0.0;
+    precise float size = 0.0;
+    precise float scale = 0.0;
+    precise float norm = 0.0;
+    precise float lambda = 1.0;
+    uint mode = 0u;
+    uint it = 0u;
+    uint ls = 0u;
+    for (uint k = 0u; k < 290u; k++) {
+        precise diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, pa, pb);
+        if (mode == 2u) {
+            if (at.det > 0.0) {
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
+            }
+            return x;
+        }
+        if (mode == 1u) {
+            if (!(max(abs(at.r0), abs(at.r1)) < norm || ls == 8u)) {
+                lambda = lambda * 0.5;
+                ls = ls + 1u;
+                pa = a - lambda * d0;
+                pb = diffbsdf_tiny_sphere_wrap(b - lambda * d1);
+                continue;
+            }
+            a = pa;
+            b = pb;
+            if (lambda * size <= 0.002 * scale && at.det > 0.0) {
+                // The step just taken was below the noise: converged here.
+                x.a = a;
+                x.b = b;
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
+                return x;
+            }
+            it = it + 1u;
+            if (it == 32u) {
+                return x;
+            }
+        }
+        d0 = at.r0;
+        d1 = at.r1;
         if (at.det > 0.0) {
             // d = (I + h J)^-1 r by the 2x2 adjugate.
             d0 = ((1.0 + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;
             d1 = ((1.0 + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;
         }
-        precise float size = max(abs(d0), abs(d1));
+        size = max(abs(d0), abs(d1));
         if (!((floatBitsToUint(size) & 0x7f800000u) != 0x7f800000u)) {
             return x;
         }
-        precise float scale = 1.0 + max(abs(a), abs(b));
+        scale = 1.0 + max(abs(a), abs(b));
         if (size <= 0.002 * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it (at x itself where the update
@@ -486,7 +531,10 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
             x.a = a - d0;
             x.b = diffbsdf_tiny_sphere_wrap(b - d1);
             if (x.a != a || x.b != b) {
-                at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, x.a, x.b);
+                pa = x.a;
+                pb = x.b;
+                mode = 2u;
+                continue;
             }
             if (at.det > 0.0) {
                 x.det = at.det;
@@ -495,30 +543,12 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
             }
             return x;
         }
-        precise float norm = max(abs(at.r0), abs(at.r1));
-        precise float lambda = 1.0;
-        precise float ta = a;
-        precise float tb = b;
-        for (uint ls = 0u; ls < 9u; ls++) {
-            ta = a - lambda * d0;
-            tb = diffbsdf_tiny_sphere_wrap(b - lambda * d1);
-            at = diffbsdf_tiny_sphere_residual(base, cond, t, h, ya, yb, ta, tb);
-            if (max(abs(at.r0), abs(at.r1)) < norm || ls == 8u) {
-                break;
-            }
-            lambda = lambda * 0.5;
-        }
-        a = ta;
-        b = tb;
-        if (lambda * size <= 0.002 * scale && at.det > 0.0) {
-            // The step just taken was below the noise: converged here.
-            x.a = a;
-            x.b = b;
-            x.det = at.det;
-            x.va = at.v0;
-            x.vb = at.v1;
-            return x;
-        }
+        norm = max(abs(at.r0), abs(at.r1));
+        lambda = 1.0;
+        ls = 0u;
+        pa = a - d0;
+        pb = diffbsdf_tiny_sphere_wrap(b - d1);
+        mode = 1u;
     }
     return x;
 }
@@ -526,29 +556,35 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
 // The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next
 // time; else from y - h v(y), one fixed-point iterate further, y - h v(y) / 2.
 diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(uint base, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float va, float vb) {
-    precise float an = ya - h * va;
-    precise float bn = diffbsdf_tiny_sphere_wrap(yb - h * vb);
-    precise diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, an, bn);
-    if (x.det > 0.0) {
-        return x;
+    precise float sa = ya - h * va;
+    precise float sb = diffbsdf_tiny_sphere_wrap(yb - h * vb);
+    precise float qa = ya;
+    precise float qb = yb;
+    precise float vya = 0.0;
+    precise float vyb = 0.0;
+    precise diffbsdf_tiny_sphere_Root x;
+    for (uint s = 0u; s < 4u; s++) {
+        if (s == 1u || s == 2u) {
+            precise diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, qa, qb);
+            if (s == 1u) {
+                vya = v.x;
+                vyb = v.y;
+            }
+            sa = ya - h * v.x;
+            sb = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
+            qa = sa;
+            qb = sb;
+        }
+        if (s == 3u) {
+            sa = ya - 0.5 * h * vya;
+            sb = diffbsdf_tiny_sphere_wrap(yb - 0.5 * h * vyb);
+        }
+        x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, sa, sb);
+        if (x.det > 0.0) {
+            return x;
+        }
     }
-    precise diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(base, cond, t, ya, yb);
-    precise float a0 = ya - h * v.x;
-    precise float b0 = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
-    x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a0, b0);
-    if (x.det > 0.0) {
-        return x;
-    }
-    precise diffbsdf_tiny_sphere_Vec2 v1 = diffbsdf_tiny_sphere_velocity(base, cond, t, a0, b0);
-    precise float a1 = ya - h * v1.x;
-    precise float b1 = diffbsdf_tiny_sphere_wrap(yb - h * v1.y);
-    x = diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a1, b1);
-    if (x.det > 0.0) {
-        return x;
-    }
-    precise float a2 = ya - 0.5 * h * v.x;
-    precise float b2 = diffbsdf_tiny_sphere_wrap(yb - 0.5 * h * v.y);
-    return diffbsdf_tiny_sphere_newton(base, cond, t, h, ya, yb, a2, b2);
+    return x;
 }
 
 // The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's

@@ -323,6 +323,8 @@ static inline diffbsdf_tiny_sphere_Residual diffbsdf_tiny_sphere_residual(const 
 /* Solves x + h v(x) = y from x = (xa, xb): Newton steps where det(I + h dv/dx) > 0, */
 /* fixed-point steps where not; each step backtracks from the same point (full, */
 /* half, ..., at most 8 halvings) to the first that shrinks the residual. */
+/* One residual call site: mode 0 evaluates the start, 1 a line-search trial, 2 the */
+/* converged point. */
 static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float *params, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float xa, float xb) {
     diffbsdf_tiny_sphere_Root x;
     x.a = 0.0f;
@@ -332,20 +334,63 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float 
     x.vb = 0.0f;
     float a = xa;
     float b = xb;
-    diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(params, cond, t, h, ya, yb, a, b);
-    for (unsigned it = 0u; it < 32u; it++) {
-        float d0 = at.r0;
-        float d1 = at.r1;
+    float pa = xa;
+    float pb = xb;
+    float d0 = 0.0f;
+    float d1 = 0.0f;
+    float size = 0.0f;
+    float scale = 0.0f;
+    float norm = 0.0f;
+    float lambda = 1.0f;
+    unsigned mode = 0u;
+    unsigned it = 0u;
+    unsigned ls = 0u;
+    for (unsigned k = 0u; k < 290u; k++) {
+        diffbsdf_tiny_sphere_Residual at = diffbsdf_tiny_sphere_residual(params, cond, t, h, ya, yb, pa, pb);
+        if (mode == 2u) {
+            if (at.det > 0.0f) {
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
+            }
+            return x;
+        }
+        if (mode == 1u) {
+            if (!(fmaxf(fabsf(at.r0), fabsf(at.r1)) < norm || ls == 8u)) {
+                lambda = lambda * 0.5f;
+                ls = ls + 1u;
+                pa = a - lambda * d0;
+                pb = diffbsdf_tiny_sphere_wrap(b - lambda * d1);
+                continue;
+            }
+            a = pa;
+            b = pb;
+            if (lambda * size <= 1e-6f * scale && at.det > 0.0f) {
+                /* The step just taken was below the noise: converged here. */
+                x.a = a;
+                x.b = b;
+                x.det = at.det;
+                x.va = at.v0;
+                x.vb = at.v1;
+                return x;
+            }
+            it = it + 1u;
+            if (it == 32u) {
+                return x;
+            }
+        }
+        d0 = at.r0;
+        d1 = at.r1;
         if (at.det > 0.0f) {
             /* d = (I + h J)^-1 r by the 2x2 adjugate. */
             d0 = ((1.0f + h * at.j11) * at.r0 - (h * at.j01) * at.r1) / at.det;
             d1 = ((1.0f + h * at.j00) * at.r1 - (h * at.j10) * at.r0) / at.det;
         }
-        float size = fmaxf(fabsf(d0), fabsf(d1));
+        size = fmaxf(fabsf(d0), fabsf(d1));
         if (!(fabsf(size) <= 3.40282347e+38f)) {
             return x;
         }
-        float scale = 1.0f + fmaxf(fabsf(a), fabsf(b));
+        scale = 1.0f + fmaxf(fabsf(a), fabsf(b));
         if (size <= 1e-6f * scale) {
             /* Converged: the update is below the f32 noise of x + h v(x); det is taken at the */
             /* returned point, where the forward pass takes it (at x itself where the update */
@@ -353,7 +398,10 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float 
             x.a = a - d0;
             x.b = diffbsdf_tiny_sphere_wrap(b - d1);
             if (x.a != a || x.b != b) {
-                at = diffbsdf_tiny_sphere_residual(params, cond, t, h, ya, yb, x.a, x.b);
+                pa = x.a;
+                pb = x.b;
+                mode = 2u;
+                continue;
             }
             if (at.det > 0.0f) {
                 x.det = at.det;
@@ -362,30 +410,12 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float 
             }
             return x;
         }
-        float norm = fmaxf(fabsf(at.r0), fabsf(at.r1));
-        float lambda = 1.0f;
-        float ta = a;
-        float tb = b;
-        for (unsigned ls = 0u; ls < 9u; ls++) {
-            ta = a - lambda * d0;
-            tb = diffbsdf_tiny_sphere_wrap(b - lambda * d1);
-            at = diffbsdf_tiny_sphere_residual(params, cond, t, h, ya, yb, ta, tb);
-            if (fmaxf(fabsf(at.r0), fabsf(at.r1)) < norm || ls == 8u) {
-                break;
-            }
-            lambda = lambda * 0.5f;
-        }
-        a = ta;
-        b = tb;
-        if (lambda * size <= 1e-6f * scale && at.det > 0.0f) {
-            /* The step just taken was below the noise: converged here. */
-            x.a = a;
-            x.b = b;
-            x.det = at.det;
-            x.va = at.v0;
-            x.vb = at.v1;
-            return x;
-        }
+        norm = fmaxf(fabsf(at.r0), fabsf(at.r1));
+        lambda = 1.0f;
+        ls = 0u;
+        pa = a - d0;
+        pb = diffbsdf_tiny_sphere_wrap(b - d1);
+        mode = 1u;
     }
     return x;
 }
@@ -393,29 +423,35 @@ static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(const float 
 /* The x with x + h v(x) = y: Newton from y - h (va, vb), the velocity at the next */
 /* time; else from y - h v(y), one fixed-point iterate further, y - h v(y) / 2. */
 static inline diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_invert_step(const float *params, diffbsdf_tiny_sphere_Cond cond, float t, float h, float ya, float yb, float va, float vb) {
-    float an = ya - h * va;
-    float bn = diffbsdf_tiny_sphere_wrap(yb - h * vb);
-    diffbsdf_tiny_sphere_Root x = diffbsdf_tiny_sphere_newton(params, cond, t, h, ya, yb, an, bn);
-    if (x.det > 0.0f) {
-        return x;
+    float sa = ya - h * va;
+    float sb = diffbsdf_tiny_sphere_wrap(yb - h * vb);
+    float qa = ya;
+    float qb = yb;
+    float vya = 0.0f;
+    float vyb = 0.0f;
+    diffbsdf_tiny_sphere_Root x;
+    for (unsigned s = 0u; s < 4u; s++) {
+        if (s == 1u || s == 2u) {
+            diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(params, cond, t, qa, qb);
+            if (s == 1u) {
+                vya = v.x;
+                vyb = v.y;
+            }
+            sa = ya - h * v.x;
+            sb = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
+            qa = sa;
+            qb = sb;
+        }
+        if (s == 3u) {
+            sa = ya - 0.5f * h * vya;
+            sb = diffbsdf_tiny_sphere_wrap(yb - 0.5f * h * vyb);
+        }
+        x = diffbsdf_tiny_sphere_newton(params, cond, t, h, ya, yb, sa, sb);
+        if (x.det > 0.0f) {
+            return x;
+        }
     }
-    diffbsdf_tiny_sphere_Vec2 v = diffbsdf_tiny_sphere_velocity(params, cond, t, ya, yb);
-    float a0 = ya - h * v.x;
-    float b0 = diffbsdf_tiny_sphere_wrap(yb - h * v.y);
-    x = diffbsdf_tiny_sphere_newton(params, cond, t, h, ya, yb, a0, b0);
-    if (x.det > 0.0f) {
-        return x;
-    }
-    diffbsdf_tiny_sphere_Vec2 v1 = diffbsdf_tiny_sphere_velocity(params, cond, t, a0, b0);
-    float a1 = ya - h * v1.x;
-    float b1 = diffbsdf_tiny_sphere_wrap(yb - h * v1.y);
-    x = diffbsdf_tiny_sphere_newton(params, cond, t, h, ya, yb, a1, b1);
-    if (x.det > 0.0f) {
-        return x;
-    }
-    float a2 = ya - 0.5f * h * v.x;
-    float b2 = diffbsdf_tiny_sphere_wrap(yb - 0.5f * h * v.y);
-    return diffbsdf_tiny_sphere_newton(params, cond, t, h, ya, yb, a2, b2);
+    return x;
 }
 
 /* The PDF of direction (ox, oy, oz): each Euler step inverted exactly by Newton's */

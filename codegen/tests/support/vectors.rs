@@ -379,11 +379,25 @@ pub fn pdf_vectors(kernel: &Kernel, samples: &[([f32; 3], [f32; 2])]) -> Vec<([f
 #[derive(Default, Debug, Clone, Copy)]
 pub struct Errors {
     pub max_dir: f32,
-    /// Largest PDF error relative to the PDF, divided by `max(1, |ln pdf|)`.
+    /// Largest PDF error relative to the PDF, divided by its allowance's scale
+    /// (`max(1, |ln pdf|)` plus the condition of the measure and of the inverse).
     pub max_pdf_rel: f32,
+    /// Largest PDF error relative to the PDF, as is.
+    pub max_pdf_raw: f32,
     pub compared: usize,
     /// Comparisons where the kernel's answer was a valid sample or a positive PDF.
     pub valid: usize,
+}
+
+impl Errors {
+    /// Adds another run's comparisons (largest errors, counts).
+    pub fn merge(&mut self, e: &Errors) {
+        self.max_dir = self.max_dir.max(e.max_dir);
+        self.max_pdf_rel = self.max_pdf_rel.max(e.max_pdf_rel);
+        self.max_pdf_raw = self.max_pdf_raw.max(e.max_pdf_raw);
+        self.compared += e.compared;
+        self.valid += e.valid;
+    }
 }
 
 /// Compares an optional direction (`None` written as zeros) with the kernel's.
@@ -430,6 +444,7 @@ pub fn check_pdf(what: &str, got: f32, want: f32, measure: f32, tol: f32, e: &mu
     let scale = want.ln().abs().max(1.0) + measure;
     let r = (got - want).abs() / want.abs();
     e.max_pdf_rel = e.max_pdf_rel.max(r / scale);
+    e.max_pdf_raw = e.max_pdf_raw.max(r);
     let tol = tol * scale;
     assert!(
         r <= tol,
