@@ -1,5 +1,5 @@
 //! Batch calls over slices for Rust callers (the Python package): the C ABI's row loop
-//! ([`crate::parallel::each`]), so the same run-time choice of the kernel's AVX2 copy, and
+//! (`parallel::each`), so the same run-time choice of the kernel's AVX2 copy, and
 //! the same bits as the kernel's own batch calls (`AnyModel::sample_batch` etc.), which
 //! they otherwise equal: same arguments, same results, same errors.
 
