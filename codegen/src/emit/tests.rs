@@ -202,22 +202,20 @@ fn newton_constants_are_the_kernels() {
     for o in outputs() {
         let tol = if o.half { NEWTON_TOL_F16 } else { NEWTON_TOL };
         let b = body(&o, "newton");
-        let iters = b
+        // One loop over residual evaluations: the start, NEWTON_MAX_ITERS iterations of at
+        // most LINE_SEARCH_HALVINGS + 1 trials each, and the converged point.
+        let evaluations = b
             .iter()
-            .find(|l| l.starts_with("for (") && l.contains("it <"));
-        let iters = iters.unwrap_or_else(|| panic!("{}: no Newton loop", o.label));
-        assert_eq!(uints(iters), [0, NEWTON_MAX_ITERS], "{}", o.label);
-        let halvings = b
-            .iter()
-            .find(|l| l.starts_with("for (") && l.contains("ls <"));
-        let halvings = halvings.unwrap_or_else(|| panic!("{}: no line search", o.label));
-        // The full step and LINE_SEARCH_HALVINGS halvings of it; the last one is taken.
+            .find(|l| l.starts_with("for (") && l.contains("k <"));
+        let evaluations = evaluations.unwrap_or_else(|| panic!("{}: no Newton loop", o.label));
         assert_eq!(
-            uints(halvings),
-            [0, LINE_SEARCH_HALVINGS + 1],
+            uints(evaluations),
+            [0, 2 + NEWTON_MAX_ITERS * (LINE_SEARCH_HALVINGS + 1)],
             "{}",
             o.label
         );
+        let iters = line(&o, &b, "if (it ==");
+        assert_eq!(uints(iters), [NEWTON_MAX_ITERS], "{}", o.label);
         let last = b.iter().find(|l| l.contains("< norm || ls =="));
         let last = last.unwrap_or_else(|| panic!("{}: no last-halving test", o.label));
         assert_eq!(uints(last), [LINE_SEARCH_HALVINGS], "{}", o.label);
