@@ -29,6 +29,11 @@ pub mod input {
     pub use crate::input::*;
 }
 
+/// The exactness sweep: the samples on which `pdf()` is checked against `sample`.
+pub mod exactness {
+    pub use crate::exactness::*;
+}
+
 /// The polynomial `exp` of the activation.
 pub mod math {
     pub use crate::math::exp_poly;

@@ -41,6 +41,7 @@ mod blob;
 mod def;
 mod diagnostics;
 mod domain;
+mod exactness;
 mod flow;
 mod frame;
 mod input;

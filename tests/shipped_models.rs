@@ -5,11 +5,11 @@
 mod support;
 
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::internals::Diagnostics;
+use diffbsdf::internals::exactness::{self, Outcome};
 use diffbsdf::spec::{PDF_CONSISTENCY_TOL, PDF_ROUNDING_SPAN};
-use diffbsdf::{AnyModel, Domain, IncidentRange};
+use diffbsdf::{AnyModel, IncidentRange};
 use std::path::PathBuf;
-use support::{direction, rel, Rng};
+use support::{direction, Rng};
 
 /// Valid samples per model and precision; `DIFFBSDF_CONSISTENCY_SAMPLES` raises it (the
 /// README's full check uses 1 000 000).
@@ -20,99 +20,39 @@ fn samples_per_model() -> usize {
         .unwrap_or(60_000)
 }
 
-/// Incident polar angles: normal incidence to grazing; below the surface too for models
-/// declared for them.
-fn incident_thetas(domain: Domain, below: bool) -> Vec<f32> {
-    let mut deg = vec![0.0f32, 10.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0, 89.9];
-    if domain.is_spherical() && below {
-        deg.extend([90.1, 100.0, 135.0, 170.0, 180.0]);
-    }
-    deg.into_iter().map(f32::to_radians).collect()
-}
+/// One exact sample: relative difference, its ratio to the rounding change (0 within the
+/// plain tolerance) and the smallest step determinant of its trajectory.
+type Exact = [f32; 3];
 
-/// `u` for sample `k`: a third uniform, a third with `u1` and a third with `u0` in strips
-/// of width 5e-4 at 0 and 1 (where the base quantile is steepest).
-fn uniform_pair(rng: &mut Rng, k: usize) -> Vec2 {
-    let (mut a, mut b) = (rng.uniform(), rng.uniform());
-    let edge = |rng: &mut Rng| {
-        let s = rng.uniform() * 5e-4;
-        if rng.uniform() < 0.5 {
-            s
-        } else {
-            1.0 - s
-        }
-    };
-    match k % 3 {
-        1 => b = edge(rng),
-        2 => a = edge(rng),
-        _ => {}
-    }
-    Vec2::new(a, b)
-}
-
-/// What one incident angle gave: valid samples, zero PDFs, samples past PDF_TOL, the
-/// worst relative difference and the worst ratio to the rounding bound.
-#[derive(Default)]
-struct Consistency {
-    valid: usize,
-    zero: usize,
-    past_tol: usize,
-    worst: f32,
-    worst_over_kappa: f32,
-}
-
-fn consistency(name: &str, m: &AnyModel, theta: f32, per_theta: usize, seed: u64) -> Consistency {
-    let steps = m.def().default_steps as u32;
-    let mut pts = vec![[0.0f32; 2]; steps as usize + 1];
+/// The kernel's exactness sweep (`internals::exactness`, what `fit` checks before it ships
+/// a step count) at one incident angle, on this test's own random numbers; any broken
+/// promise fails the test with the sample that broke it.
+fn consistency(name: &str, m: &AnyModel, theta: f32, per_theta: usize, seed: u64) -> Vec<Exact> {
+    let steps = m.def().default_steps as usize;
+    let mut pts = vec![[0.0f32; 2]; steps + 1];
     let mut rng = Rng::new(seed);
-    let mut c = Consistency::default();
+    let mut exact = Vec::with_capacity(per_theta);
     let mut k = 0;
-    while c.valid < per_theta && k < 4 * per_theta {
-        let phi = std::f32::consts::TAU * rng.uniform();
-        let wi = Vec3::new(
-            theta.sin() * phi.cos(),
-            theta.sin() * phi.sin(),
-            theta.cos(),
-        );
-        let u = uniform_pair(&mut rng, k);
+    while exact.len() < per_theta && k < 4 * per_theta {
+        let wi = exactness::incident(theta, std::f32::consts::TAU * rng.uniform());
+        let r = [rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform()];
+        let u = exactness::sweep_u(k, r);
         k += 1;
-        let dir = m.sample_direction(wi, u);
-        let Some(s) = m.sample(wi, u) else {
-            assert!(dir.is_none(), "{name}: paths disagree on validity");
-            continue;
-        };
-        assert_eq!(dir, Some(s.wo), "{name}");
-        assert!(s.pdf.is_finite() && s.pdf > 0.0);
-        let min_det = m.trajectory(wi, u, steps, &mut pts).unwrap();
-        assert!(
-            min_det > 0.0,
-            "{name}: det {min_det} along a trajectory for wi {wi:?}"
-        );
-        c.valid += 1;
-        let back = m.pdf(wi, s.wo);
-        assert!(
-            back > 0.0,
-            "{name}: pdf() = {back} for a valid sample: wi {wi:?} u {u:?} (sampled {})",
-            s.pdf
-        );
-        let r = rel(back, s.pdf, 0.0);
-        c.worst = c.worst.max(r);
-        if r > PDF_CONSISTENCY_TOL {
-            c.past_tol += 1;
-            let kappa = m.pdf_rounding(wi, s.wo, back, pts[0]);
-            c.worst_over_kappa = c.worst_over_kappa.max(r / kappa);
-            assert!(
-                m.pdf_consistent(wi, s.wo, s.pdf, back, pts[0]),
-                "{name}: wi {wi:?} u {u:?}: sampled {} vs pdf() {back} (rel {r:e}, density change per epsilon of wo {kappa:e})",
-                s.pdf
-            );
+        match exactness::check(m, wi, u, &mut pts, PDF_ROUNDING_SPAN) {
+            Outcome::Invalid => {}
+            Outcome::Exact {
+                rel,
+                over_rounding,
+                min_det,
+            } => exact.push([rel, over_rounding, min_det]),
+            Outcome::Broken(b) => panic!("{name}: {b:?}"),
         }
     }
     assert!(
-        c.valid * 4 > k,
+        exact.len() * 4 > k,
         "{name}: most samples at theta {theta} should be valid"
     );
-    c
+    exact
 }
 
 /// Every shipped model, f32 and f16: forward and inverse agree on every valid sample
@@ -122,10 +62,10 @@ fn shipped_models_are_invertible_and_consistent() {
     let per_model = samples_per_model();
     for (name, bytes) in support::shipped_blobs() {
         let m = AnyModel::from_blob(&bytes).unwrap();
-        let below = m.def().incident == IncidentRange::WholeSphere;
-        let thetas = incident_thetas(m.def().domain, below);
-        let per_theta = per_model.div_ceil(thetas.len());
-        let results: Vec<Consistency> = std::thread::scope(|scope| {
+        let (all, n) = exactness::thetas(&m);
+        let thetas = &all[..n];
+        let per_theta = per_model.div_ceil(n);
+        let exact: Vec<Exact> = std::thread::scope(|scope| {
             let jobs: Vec<_> = thetas
                 .iter()
                 .enumerate()
@@ -134,19 +74,19 @@ fn shipped_models_are_invertible_and_consistent() {
                     scope.spawn(move || consistency(name, m, t, per_theta, i as u64 + 1))
                 })
                 .collect();
-            jobs.into_iter().map(|j| j.join().unwrap()).collect()
+            jobs.into_iter().flat_map(|j| j.join().unwrap()).collect()
         });
-        let sum = |f: fn(&Consistency) -> usize| results.iter().map(f).sum::<usize>();
-        let worst = results.iter().map(|c| c.worst).fold(0.0, f32::max);
-        let over = results
+        let largest = |i: usize| exact.iter().map(|e| e[i]).fold(0.0, f32::max);
+        let min_det = exact.iter().map(|e| e[2]).fold(f32::INFINITY, f32::min);
+        let past_tol = exact
             .iter()
-            .map(|c| c.worst_over_kappa)
-            .fold(0.0, f32::max);
+            .filter(|e| !exactness::within_plain_tolerance(e[0]))
+            .count();
         println!(
-            "{name}: {} valid, pdf() = 0 on {}, rel > {PDF_CONSISTENCY_TOL:e} on {} (worst {worst:.2e}, at most {over:.1} x the rounding bound; allowed {PDF_ROUNDING_SPAN})",
-            sum(|c| c.valid),
-            sum(|c| c.zero),
-            sum(|c| c.past_tol),
+            "{name}: {} valid, all exact; rel > {PDF_CONSISTENCY_TOL:e} on {past_tol} (at most {:.1} x the rounding change; allowed {PDF_ROUNDING_SPAN}), worst {:.2e}; min det {min_det:.3}",
+            exact.len(),
+            largest(1),
+            largest(0),
         );
     }
 }

@@ -28,6 +28,10 @@ pub struct EvalArgs {
     /// Euler steps (default: the blob's). The PDF stays exact for any count.
     #[arg(long)]
     pub steps: Option<u16>,
+    /// Valid samples of the exactness sweep (`pdf()` against the sampled PDF, f32 and
+    /// f16 together, normal to grazing wi, u at the edges of [0, 1]); 0 skips it.
+    #[arg(long, default_value_t = diffbsdf_train::metrics::exactness::DEFAULT_SAMPLES)]
+    pub exact_samples: usize,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
@@ -44,6 +48,7 @@ pub fn run(args: EvalArgs, out: &mut dyn std::io::Write) -> Result<(), CommandEr
     let mut cfg = EvalConfig {
         samples: args.samples,
         seed: args.seed,
+        exact_samples: args.exact_samples,
         ..EvalConfig::default()
     };
     if args.no_kl {

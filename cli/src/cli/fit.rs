@@ -2,7 +2,7 @@
 //! trains a sampler for a material and writes its blob (f32 at `--out`, f16 beside it as
 //! `<stem>.f16.dbsdf`), then measures its quality unless `--no-eval`.
 
-use super::choose::{fewest_steps, invertible_steps, Candidate, Criteria};
+use super::choose::{exact_steps, fewest_steps, Candidate, Criteria};
 use clap::{Args, ValueEnum};
 use diffbsdf::{Domain, Precision};
 use diffbsdf_materials::{parse_spec, SpecError};
@@ -60,20 +60,23 @@ pub struct FitArgs {
     /// allowed at grazing wi (theta_i >= 85 deg) before the sphere is used instead.
     #[arg(long, default_value_t = 20.0)]
     pub max_grazing_firefly: f64,
-    /// Samples per wi of the checks (`--domain auto`, `--target-rv`, and the invertibility
-    /// of the shipped steps).
+    /// Samples per wi of the quality checks (`--domain auto`, `--target-rv`).
     #[arg(long, default_value_t = 1 << 14)]
     pub check_samples: usize,
+    /// Valid samples of the exactness sweep that every shipped step count must pass
+    /// (`pdf()` equal to the sampled PDF, f32 and f16 together, normal to grazing wi, u at
+    /// the edges of [0, 1]); the fit refuses a model that fails it at every step count.
+    #[arg(long, default_value_t = diffbsdf_train::metrics::exactness::DEFAULT_SAMPLES)]
+    pub exact_samples: usize,
     /// Euler steps of the student (default 4 on the disk, 8 on the sphere).
     #[arg(long)]
     pub steps: Option<u16>,
     /// Seed of every random draw: the same command and seed give the same blob.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Euler steps stored in the blob as its default (without it: the trained steps, or
-    /// 2x, 4x, ... of them where a checked step is not invertible there), when they should
-    /// differ from the steps the student was trained at (`--steps`): more steps keep every step
-    /// invertible where a sharp lobe needs it; the PDF stays exact either way.
+    /// Euler steps stored in the blob as its default, when they should differ from the
+    /// steps the student was trained at (`--steps`). Like the trained steps, they are the
+    /// first of N, 2N, 4N, ... (to 32) checked for exactness: the fewest that pass ship.
     #[arg(long)]
     pub export_steps: Option<u16>,
     /// Output blob (f32); the f16 blob is written beside it.
@@ -120,6 +123,10 @@ pub struct FitArgs {
     /// Peak learning rate of the student.
     #[arg(long)]
     pub student_lr: Option<f32>,
+    /// Decay of the teacher's weight average (`ema <- d ema + (1 - d) params`; 0.999 by
+    /// default).
+    #[arg(long)]
+    pub teacher_ema: Option<f32>,
     /// Extra training pairs with wi within 30 degrees of the horizon, as a fraction of
     /// --pairs.
     #[arg(long)]
@@ -168,6 +175,8 @@ pub enum CommandError {
     Catalog(crate::tradeoff::CatalogError),
     /// The tradeoff sweep, its plot or its images failed.
     Sweep(crate::tradeoff::SweepError),
+    /// `fit` found no step count at which the model's `pdf()` is exact (what it checked).
+    NotExact(String),
 }
 
 impl fmt::Display for CommandError {
@@ -181,6 +190,7 @@ impl fmt::Display for CommandError {
             CommandError::Codegen(e) => write!(f, "{e}"),
             CommandError::Catalog(e) => write!(f, "{e}"),
             CommandError::Sweep(e) => write!(f, "{e}"),
+            CommandError::NotExact(e) => write!(f, "{e}"),
         }
     }
 }
@@ -332,6 +342,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     if let Some(lr) = args.teacher_lr {
         c.teacher.lr = lr;
     }
+    if let Some(d) = args.teacher_ema {
+        c.teacher.ema = d;
+    }
     if let Some(lr) = args.student_lr {
         c.student.lr = lr;
     }
@@ -340,8 +353,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
 }
 
 /// Trains on each candidate domain in turn (cheapest first) until one is sufficient;
-/// returns the fit kept and the checks made (none without `--domain auto` or
-/// `--target-rv`).
+/// returns the fit kept, with the fewest exact step counts, and the checks made. Every
+/// shipped step count passes the exactness sweep; where none up to 32 does, the model is
+/// refused (`CommandError::NotExact`).
 fn fit_choosing(
     args: &FitArgs,
     material: &dyn diffbsdf_materials::Material,
@@ -356,6 +370,7 @@ fn fit_choosing(
             f64::INFINITY
         },
         samples: args.check_samples,
+        exact_samples: args.exact_samples,
     };
     let mut domains = args.domain.candidates(material).into_iter();
     let mut domain = domains.next().unwrap_or(Domain::Sphere);
@@ -363,28 +378,65 @@ fn fit_choosing(
     loop {
         let bars = Bars::default();
         let mut fitted = fit_material(material, name, &config(args, domain), &bars)?;
-        if !choosing {
-            // Unless told otherwise, ship the fewest steps (N, 2N, ...) with every
-            // checked step invertible.
-            if args.export_steps.is_none() {
-                let (steps, tried) = invertible_steps(&fitted.model, material, args.check_samples);
+        let trained = fitted.model.def().default_steps;
+        let picked = if choosing {
+            let (pick, tried) = fewest_steps(&fitted.model, material, &criteria)?;
+            checks.extend(tried);
+            match (pick, domains.next()) {
+                (Some(p), _) => Some(p.steps),
+                (None, Some(next)) => {
+                    domain = next;
+                    continue;
+                }
+                // Nothing sufficed: the most capable domain, at the fewest exact steps.
+                (None, None) => None,
+            }
+        } else {
+            None
+        };
+        // `--export-steps` starts the ladder where given; a pick that is already exact
+        // ships as it is.
+        let steps = match (args.export_steps, picked) {
+            (None, Some(p)) => p,
+            (from, _) => {
+                let from = from.unwrap_or(trained);
+                let (exact, tried) =
+                    exact_steps(&fitted.model, material, from, args.exact_samples)?;
                 checks.extend(tried);
-                fitted.model = fitted.model.with_steps(steps);
+                match exact {
+                    Some(n) => n,
+                    None => {
+                        return Err(refuse(args, &fitted, &checks));
+                    }
+                }
             }
-            return Ok((fitted, checks));
-        }
-        let (pick, tried) = fewest_steps(&fitted.model, material, &criteria);
-        checks.extend(tried);
-        match (pick, domains.next()) {
-            (Some(p), _) => {
-                fitted.model = fitted.model.with_steps(p.steps);
-                return Ok((fitted, checks));
-            }
-            (None, Some(next)) => domain = next,
-            // Nothing sufficed: the most capable domain at its trained steps.
-            (None, None) => return Ok((fitted, checks)),
-        }
+        };
+        fitted.model = fitted.model.with_steps(steps);
+        return Ok((fitted, checks));
     }
+}
+
+/// The error for a model that is not exact at any step count; its blob is kept beside
+/// `--out` as `<stem>.not-exact.dbsdf` for inspection, never at `--out`.
+fn refuse(args: &FitArgs, fitted: &diffbsdf_train::Fitted, checks: &[Candidate]) -> CommandError {
+    let kept = args.out.with_extension("not-exact.dbsdf");
+    let saved = fitted
+        .model
+        .blob(Precision::F32)
+        .map_err(CommandError::from)
+        .and_then(|b| write_file(&kept, &b));
+    let last = checks
+        .last()
+        .map(|c| c.exactness.summary())
+        .unwrap_or_default();
+    CommandError::NotExact(format!(
+        "no step count up to 32 keeps pdf() equal to the sampled PDF on every checked sample; nothing written at {}{}\n{last}",
+        args.out.display(),
+        match saved {
+            Ok(()) => format!(" (the model is at {} for inspection)", kept.display()),
+            Err(e) => format!(" (keeping it for inspection failed too: {e})"),
+        }
+    ))
 }
 
 /// Runs `diffbsdf fit`.
@@ -398,10 +450,7 @@ pub fn run(args: FitArgs, out: &mut dyn std::io::Write) -> Result<(), CommandErr
             .unwrap_or("model");
         stem.chars().take(32).collect()
     });
-    let (mut fitted, choice) = fit_choosing(&args, material.as_ref(), &name)?;
-    if let Some(n) = args.export_steps {
-        fitted.model = fitted.model.with_steps(n.max(1));
-    }
+    let (fitted, choice) = fit_choosing(&args, material.as_ref(), &name)?;
     let f32_blob = fitted.model.blob(Precision::F32)?;
     let f16_blob = fitted.model.blob(Precision::F16)?;
     let f16_out = f16_path(&args.out);
@@ -410,6 +459,7 @@ pub fn run(args: FitArgs, out: &mut dyn std::io::Write) -> Result<(), CommandErr
     let report = (!args.no_eval).then(|| {
         let eval = EvalConfig {
             samples: args.eval_samples,
+            exact_samples: args.exact_samples,
             ..EvalConfig::default()
         };
         evaluate(&fitted.model, material.as_ref(), &eval)
@@ -450,15 +500,7 @@ pub fn run(args: FitArgs, out: &mut dyn std::io::Write) -> Result<(), CommandErr
         );
     }
     for c in &choice {
-        text += &format!(
-            "  checked {:<6} N={:<2}: mean RV {:.4}, grazing firefly {:.1}, det<=0 {:.4} % -> {}\n",
-            c.domain,
-            c.steps,
-            c.rv_mean,
-            c.grazing_firefly,
-            100.0 * c.non_positive_det,
-            if c.sufficient { "sufficient" } else { "short" }
-        );
+        text += &format!("  {}\n", c.line());
     }
     if let Some(r) = &report {
         text += &table::render(r);

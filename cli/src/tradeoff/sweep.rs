@@ -148,6 +148,7 @@ pub fn measure_point(
     let eval = EvalConfig {
         samples: cfg.samples,
         consistency_samples: cfg.consistency_samples,
+        exact_samples: 0,
         kl: cfg.kl,
         timing_calls: 0,
         seed: cfg.seed,

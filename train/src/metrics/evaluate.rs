@@ -3,6 +3,7 @@
 
 use super::consistency::{self, Consistency, ConsistencySamples};
 use super::cost::{self, Cost};
+use super::exactness::{self, Exactness};
 use super::grid::wi_grid;
 use super::kl::{kl_divergence, KlGrid};
 use super::sampler::{draw, weight, SamplerKind};
@@ -22,6 +23,9 @@ pub struct EvalConfig {
     pub samples: usize,
     /// Samples per `wi` for PDF consistency and determinants.
     pub consistency_samples: usize,
+    /// Valid samples of the exactness sweep (f32 and f16 together, `exactness::check`);
+    /// 0 skips it.
+    pub exact_samples: usize,
     /// KL quadrature; `None` skips KL.
     pub kl: Option<KlGrid>,
     /// Calls timed for the cost figures; 0 skips timing.
@@ -35,6 +39,7 @@ impl Default for EvalConfig {
         EvalConfig {
             samples: 1 << 16,
             consistency_samples: 2048,
+            exact_samples: super::exactness::DEFAULT_SAMPLES,
             kl: Some(KlGrid {
                 theta: 64,
                 phi: 128,
@@ -112,6 +117,8 @@ pub struct Report {
     pub rv_ratio_to_material: f64,
     /// PDF consistency and determinants of the learned model.
     pub consistency: Consistency,
+    /// The exactness sweep (f32 and f16), if run.
+    pub exactness: Option<Exactness>,
     /// Time per sample, if measured.
     pub cost: Option<Cost>,
     /// Per-`wi` rows.
@@ -248,6 +255,9 @@ pub fn evaluate(model: &AnyModel, material: &dyn Material, cfg: &EvalConfig) -> 
         material_sampler,
         cosine,
         consistency: all.summary(),
+        exactness: (cfg.exact_samples > 0)
+            .then(|| exactness::check(model, cfg.exact_samples, cfg.seed).ok())
+            .flatten(),
         cost,
         rows,
     }

@@ -6,6 +6,7 @@
 pub mod consistency;
 pub mod cost;
 pub mod evaluate;
+pub mod exactness;
 pub mod grid;
 pub mod kl;
 pub mod sampler;

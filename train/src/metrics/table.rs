@@ -55,6 +55,9 @@ pub fn render(r: &Report) -> String {
         c.min_det,
         100.0 * c.non_positive_det
     );
+    if let Some(e) = &r.exactness {
+        s += &e.summary();
+    }
     if let Some(k) = &r.cost {
         let _ = writeln!(
             s,
