@@ -1,7 +1,7 @@
 //! `diffbsdf tradeoff`: what accuracy costs in time. Sweeps the shipped models over Euler
 //! steps and weight precision, times each next to the material's own sampler, and writes
 //! `tradeoff.md` (table), `tradeoff.json`, `tradeoff.svg` (accuracy vs time) and PDF slice
-//! images `slices/NAME.png` to the output folder (default `docs/`).
+//! images `slices/NAME.png` (labelled: `slices/NAME.svg`) to the output folder (default `docs/`).
 
 use super::fit::{print_json, write_file, CommandError};
 use crate::tradeoff::{
@@ -124,7 +124,7 @@ pub fn run(args: TradeoffArgs, out: &mut dyn std::io::Write) -> Result<(), Comma
     let points = &record.points;
     std::fs::create_dir_all(&args.out).map_err(|e| CommandError::Io(args.out.clone(), e))?;
     let md = format!(
-        "# What accuracy costs in time\n\nProduced by `{}` ({} samples per `wi` and sampler, {} timed calls per entry point, {} logical cores; metrics as defined in `docs/math.md`, \"Metrics\"). Plot: [tradeoff.svg](tradeoff.svg) (x: time of a direction + PDF over the material's own sample; y: mean RV; open circles: the material's own sampler at x = 1; f16 curves thin with triangles). PDF slices: [slices/](slices/).\n\n![accuracy vs time](tradeoff.svg)\n\n{}",
+        "# What accuracy costs in time\n\nProduced by `{}` ({} samples per `wi` and sampler, {} timed calls per entry point, {} logical cores; metrics as defined in `docs/math.md`, \"Metrics\"). Plot: [tradeoff.svg](tradeoff.svg) (x: time of a direction + PDF over the material's own sample; y: mean RV; open circles: the material's own sampler at x = 1; f16 curves thin with triangles). PDF slices, labelled: `slices/NAME.svg` (the bare images: `slices/NAME.png`).\n\n![accuracy vs time](tradeoff.svg)\n\n{}",
         record.command,
         record.samples,
         record.timing_calls,
@@ -162,7 +162,11 @@ pub fn run(args: TradeoffArgs, out: &mut dyn std::io::Write) -> Result<(), Comma
         out,
         "{head}\nwrote {} (table), tradeoff.json, tradeoff.svg{}",
         args.out.join("tradeoff.md").display(),
-        if args.no_slices { "" } else { ", slices/*.png" }
+        if args.no_slices {
+            ""
+        } else {
+            ", slices/*.png and their labelled slices/*.svg"
+        }
     )
     .map_err(CommandError::Output)
 }

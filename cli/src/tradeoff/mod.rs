@@ -5,6 +5,7 @@
 pub mod catalog;
 pub mod markdown;
 pub mod plot;
+pub mod slice_labels;
 pub mod slices;
 pub mod sweep;
 

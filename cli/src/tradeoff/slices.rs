@@ -4,6 +4,7 @@
 //! the upper hemisphere, then (sphere models) target and learned over the lower one. Each
 //! hemisphere is drawn in its orthographic projection `(wo.x, wo.y)`, +x to the right.
 
+use super::slice_labels::{self, Layout};
 use super::sweep::SweepError;
 use diffbsdf::AnyModel;
 use diffbsdf_materials::{from_spherical, DVec3, Material};
@@ -79,7 +80,8 @@ fn colour(d: Option<f64>, top: f64) -> [u8; 3] {
     [c.r, c.g, c.b]
 }
 
-/// Writes the slice image of `model` against `material` to `path` (PNG).
+/// Writes the slice image of `model` against `material` to `path` (PNG), and beside it
+/// the same image with its labels (`slice_labels`, `.svg`).
 pub fn write_png(
     model: &AnyModel,
     material: &dyn Material,
@@ -122,14 +124,32 @@ pub fn write_png(
             }
         }
     }
-    let io = |e: std::io::Error| SweepError::Image(path.display().to_string(), e.to_string());
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, h as u32);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
     let png_err =
         |e: png::EncodingError| SweepError::Image(path.display().to_string(), e.to_string());
-    let mut writer = enc.write_header().map_err(png_err)?;
-    writer.write_image_data(&img).map_err(png_err)?;
-    writer.finish().map_err(png_err)
+    let mut bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut bytes, w as u32, h as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header().map_err(png_err)?;
+        writer.write_image_data(&img).map_err(png_err)?;
+        writer.finish().map_err(png_err)?;
+    }
+    let layout = Layout {
+        model: path.file_stem().and_then(|s| s.to_str()).unwrap_or(""),
+        size: (w, h),
+        panel: PANEL,
+        gap: GAP,
+        thetas,
+        sides,
+        decades: DECADES,
+    };
+    let labelled = slice_labels::svg(&layout, &bytes);
+    let io = |p: &Path| {
+        let p = p.display().to_string();
+        move |e: std::io::Error| SweepError::Image(p, e.to_string())
+    };
+    std::fs::write(path, &bytes).map_err(io(path))?;
+    let svg = path.with_extension("svg");
+    std::fs::write(&svg, labelled).map_err(io(&svg))
 }

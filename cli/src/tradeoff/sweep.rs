@@ -6,6 +6,7 @@ use super::catalog::ShippedModel;
 use diffbsdf::AnyModel;
 use diffbsdf_materials::{from_spherical, parse_spec, Material, SpecError};
 use diffbsdf_train::metrics::cost::{self, Cost};
+use diffbsdf_train::metrics::exactness;
 use diffbsdf_train::metrics::kl::KlGrid;
 use diffbsdf_train::metrics::{evaluate, EvalConfig, Report};
 use diffbsdf_train::{ModelExt, TrainError};
@@ -23,6 +24,9 @@ pub struct SweepConfig {
     pub samples: usize,
     /// Samples per `wi` for forward/inverse PDF consistency.
     pub consistency_samples: usize,
+    /// Valid samples of the exactness sweep per point (`metrics::exactness`, the check
+    /// `fit` runs with 10^6 before it ships a step count).
+    pub exact_samples: usize,
     /// KL quadrature; `None` skips KL.
     pub kl: Option<KlGrid>,
     /// Calls timed per entry point.
@@ -38,6 +42,7 @@ impl Default for SweepConfig {
             f16: true,
             samples: 1 << 14,
             consistency_samples: 256,
+            exact_samples: 20_000,
             kl: Some(KlGrid { theta: 32, phi: 64 }),
             timing_calls: 20_000,
             seed: 7,
@@ -88,6 +93,12 @@ pub struct Point {
     pub consistency_max: f64,
     /// Fraction of trajectories with a step determinant <= 0.
     pub non_positive_det: f64,
+    /// Valid samples of the exactness sweep (0 in reports measured before it existed).
+    #[serde(default)]
+    pub exact_checked: usize,
+    /// Of them, samples that break the contract (folded step, `pdf()` 0 or inexact).
+    #[serde(default)]
+    pub exact_failures: usize,
 }
 
 /// A measured sweep as `tradeoff.json` keeps it: how it was measured, and its points.
@@ -154,6 +165,7 @@ pub fn measure_point(
         seed: cfg.seed,
     };
     let r: Report = evaluate(model, material, &eval);
+    let sweep = exactness::sweep(model, cfg.exact_samples, cfg.seed);
     // Timed after the parallel evaluation has finished: one thread, nothing beside it.
     let wi = from_spherical(45f64.to_radians(), 0.3);
     let c = cost::measure(model, material, wi, cfg.timing_calls);
@@ -180,6 +192,8 @@ pub fn measure_point(
         consistency_p99: r.consistency.p99,
         consistency_max: r.consistency.max,
         non_positive_det: r.consistency.non_positive_det,
+        exact_checked: sweep.valid,
+        exact_failures: sweep.failures(),
     }
 }
 
