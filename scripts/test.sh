@@ -51,6 +51,8 @@ objdump -d target/baseline/release/libdiffbsdf_ffi.a | awk '
   }'
 # Its AVX2 copy gives the same bits as its baseline copy (built here for baseline x86-64).
 env -u RUSTFLAGS CARGO_TARGET_DIR=target/baseline cargo test --release -p diffbsdf-ffi --test parallel --test slices
+# So do the trainer's matrix products (its AVX2 copy against the one built for baseline).
+env -u RUSTFLAGS CARGO_TARGET_DIR=target/baseline cargo test --release -p diffbsdf-train --lib tiles
 echo "== docs";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p diffbsdf -p diffbsdf-ffi -p diffbsdf-codegen
 echo "== tests";   cargo test --release --workspace
 # The kernel's input-facing tests once more without --release: debug assertions and

@@ -1,23 +1,13 @@
-//! A chunk of rows through an [`Mlp`] layer by layer, in register tiles: a weight is
-//! loaded once for several rows (the affine maps and `W^T dz`) and a gradient entry stays
-//! in a register across the chunk's rows.
+//! A chunk of rows through an [`Mlp`] layer by layer: each layer's three matrix products
+//! run over the whole chunk in register tiles ([`crate::tiles`]).
 //!
 //! Every sum keeps the order of the row-at-a-time pass ([`Mlp::forward_tape`],
-//! [`Mlp::backward`]): dot products in [`dot`]'s 8 interleaved partial sums, gradients over
-//! the rows in row order, `W^T dz` over the outputs in order, no fused multiply-add. The
-//! results are therefore the same bits, only computed with far fewer loads and stores
-//! (`block_matches_the_row_pass` below checks it).
+//! [`Mlp::backward`]), with no fused multiply-add, so the results are the same bits, only
+//! computed with far fewer loads and stores (`block_matches_the_row_pass` below checks it).
 
 use crate::mlp::{LayerAt, Mlp};
+use crate::tiles::{affine, transpose, transpose_times, weight_grad};
 use diffbsdf::internals::net::activation::silu_with_slope;
-use wide::f32x8;
-
-/// Rows per register tile of `W^T dz`.
-const ROWS: usize = 4;
-/// Outputs per register tile of the weight gradient.
-const GRAD_OUTS: usize = 4;
-/// Lanes: [`dot`]'s partial sums, and the inputs of one gradient column block.
-const LANES: usize = 8;
 
 /// The activations of a chunk, kept for its backward pass, and two scratch matrices.
 #[derive(Clone, Debug, Default)]
@@ -89,59 +79,6 @@ impl Block {
     }
 }
 
-/// `z[r][o] = b[o] + dot(W[o], a[r])` for every row of `a`, eight outputs at a time:
-/// [`dot`]'s partial sum `l` of eight outputs is one vector, and `wt` holds `W` in blocks
-/// of eight outputs ([`transpose`]), so each input multiplies one contiguous vector of
-/// weights and the final sums are lane-wise, in `dot`'s order.
-fn affine(params: &[f32], at: LayerAt, wt: &[f32], a: &[f32], z: &mut [f32]) {
-    let (n_in, n_out) = (at.n_in, at.n_out);
-    let b = &params[at.b..at.b + n_out];
-    let full = n_in - n_in % LANES;
-    for (a_row, z_row) in a.chunks_exact(n_in).zip(z.chunks_exact_mut(n_out)) {
-        for (block, (z_out, b_out)) in wt
-            .chunks_exact(n_in * LANES)
-            .zip(z_row.chunks_mut(LANES).zip(b.chunks(LANES)))
-        {
-            let mut acc = [Lanes::ZERO; LANES];
-            for (x8, w8) in a_row[..full]
-                .chunks_exact(LANES)
-                .zip(block.chunks_exact(LANES * LANES))
-            {
-                for (l, acc_l) in acc.iter_mut().enumerate() {
-                    *acc_l = acc_l.add_product(Lanes::splat(x8[l]), Lanes::load(&w8[l * LANES..]));
-                }
-            }
-            // The last inputs go to the first partial sums, as in `dot`.
-            let rest = &block[full * LANES..];
-            for (l, (x, w)) in a_row[full..]
-                .iter()
-                .zip(rest.chunks_exact(LANES))
-                .enumerate()
-            {
-                acc[l] = acc[l].add_product(Lanes::splat(*x), Lanes::load(w));
-            }
-            let sums = Lanes::reduce8(&acc);
-            for ((zv, bv), s) in z_out.iter_mut().zip(b_out).zip(sums.to_array()) {
-                *zv = bv + s;
-            }
-        }
-    }
-}
-
-/// `W` of layer `at` in blocks of [`LANES`] outputs, each block `[in][LANES]`:
-/// `wt[(k n_in + i) LANES + j] = W[k LANES + j][i]`, outputs past the last zero.
-fn transpose(params: &[f32], at: LayerAt, wt: &mut Vec<f32>) {
-    let blocks = at.n_out.div_ceil(LANES);
-    wt.clear();
-    wt.resize(blocks * at.n_in * LANES, 0.0);
-    for o in 0..at.n_out {
-        let (k, j) = (o / LANES, o % LANES);
-        for i in 0..at.n_in {
-            wt[(k * at.n_in + i) * LANES + j] = params[at.w + o * at.n_in + i];
-        }
-    }
-}
-
 /// `grad_b[o] += dz[r][o]`, rows in order.
 #[inline(never)]
 fn bias_grad(dz: &[f32], at: LayerAt, rows: usize, grad: &mut [f32]) {
@@ -150,125 +87,6 @@ fn bias_grad(dz: &[f32], at: LayerAt, rows: usize, grad: &mut [f32]) {
         for (g, d) in gb.iter_mut().zip(&dz[r * at.n_out..(r + 1) * at.n_out]) {
             *g += d;
         }
-    }
-}
-
-/// `grad_W[o][i] += dz[r][o] a[r][i]`, rows in order, each entry in a register across
-/// the rows.
-#[inline(never)]
-fn weight_grad(dz: &[f32], a: &[f32], at: LayerAt, rows: usize, grad: &mut [f32]) {
-    let (n_in, n_out) = (at.n_in, at.n_out);
-    let gw = &mut grad[at.w..at.b];
-    let full = n_in - n_in % LANES;
-    let mut o = 0;
-    while o + GRAD_OUTS <= n_out {
-        for c in (0..full).step_by(LANES) {
-            let mut acc: [Lanes; GRAD_OUTS] =
-                core::array::from_fn(|j| Lanes::load(&gw[(o + j) * n_in + c..]));
-            for r in 0..rows {
-                let av = Lanes::load(&a[r * n_in + c..]);
-                let d = &dz[r * n_out + o..r * n_out + o + GRAD_OUTS];
-                for j in 0..GRAD_OUTS {
-                    acc[j] = acc[j].add_product(av, Lanes::splat(d[j]));
-                }
-            }
-            for (j, acc_o) in acc.iter().enumerate() {
-                acc_o.store(&mut gw[(o + j) * n_in + c..]);
-            }
-        }
-        o += GRAD_OUTS;
-    }
-    // The ragged edges (last outputs, last inputs) one entry at a time, rows in order.
-    for oo in 0..n_out {
-        let first = if oo < o { full } else { 0 };
-        for i in first..n_in {
-            let mut g = gw[oo * n_in + i];
-            for r in 0..rows {
-                g += dz[r * n_out + oo] * a[r * n_in + i];
-            }
-            gw[oo * n_in + i] = g;
-        }
-    }
-}
-
-/// `da[r][i] = sum_o dz[r][o] W[o][i]`, outputs in order, a weight row loaded once for a
-/// tile of rows.
-#[inline(never)]
-fn transpose_times(params: &[f32], at: LayerAt, dz: &[f32], rows: usize, da: &mut [f32]) {
-    let (n_in, n_out) = (at.n_in, at.n_out);
-    let w = &params[at.w..at.b];
-    let full = n_in - n_in % LANES;
-    let mut r = 0;
-    while r + ROWS <= rows {
-        for c in (0..full).step_by(LANES) {
-            let mut acc = [Lanes::ZERO; ROWS];
-            for o in 0..n_out {
-                let wv = Lanes::load(&w[o * n_in + c..]);
-                for k in 0..ROWS {
-                    acc[k] = acc[k].add_product(Lanes::splat(dz[(r + k) * n_out + o]), wv);
-                }
-            }
-            for (k, acc_r) in acc.iter().enumerate() {
-                acc_r.store(&mut da[(r + k) * n_in + c..]);
-            }
-        }
-        r += ROWS;
-    }
-    // The ragged edges (last rows, last inputs) one entry at a time, outputs in order.
-    for k in 0..rows {
-        let first = if k < r { full } else { 0 };
-        for i in first..n_in {
-            let mut s = 0.0f32;
-            for o in 0..n_out {
-                s += dz[k * n_out + o] * w[o * n_in + i];
-            }
-            da[k * n_in + i] = s;
-        }
-    }
-}
-
-/// [`LANES`] floats that travel together (one AVX register, two SSE registers).
-#[derive(Clone, Copy, Debug)]
-struct Lanes(f32x8);
-
-impl Lanes {
-    const ZERO: Lanes = Lanes(f32x8::ZERO);
-
-    /// The first [`LANES`] entries of `v`.
-    #[inline(always)]
-    fn load(v: &[f32]) -> Lanes {
-        let v = &v[..LANES];
-        Lanes(f32x8::new(core::array::from_fn(|l| v[l])))
-    }
-
-    /// [`reduce8`] lane by lane over eight vectors.
-    #[inline(always)]
-    fn reduce8(v: &[Lanes; LANES]) -> Lanes {
-        Lanes(((v[0].0 + v[4].0) + (v[2].0 + v[6].0)) + ((v[1].0 + v[5].0) + (v[3].0 + v[7].0)))
-    }
-
-    /// `x` in every lane.
-    #[inline(always)]
-    fn splat(x: f32) -> Lanes {
-        Lanes(f32x8::splat(x))
-    }
-
-    /// `self + a b`, lane by lane, rounded twice (no fused multiply-add).
-    #[inline(always)]
-    fn add_product(self, a: Lanes, b: Lanes) -> Lanes {
-        Lanes(self.0 + a.0 * b.0)
-    }
-
-    /// The lanes as floats.
-    #[inline(always)]
-    fn to_array(self) -> [f32; LANES] {
-        self.0.to_array()
-    }
-
-    /// Writes the lanes to the first [`LANES`] entries of `v`.
-    #[inline(always)]
-    fn store(&self, v: &mut [f32]) {
-        v[..LANES].copy_from_slice(&self.to_array());
     }
 }
 

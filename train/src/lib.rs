@@ -13,7 +13,7 @@
 //! - [`metrics`]: relative variance, fireflies, KL divergence, PDF consistency and cost of
 //!   a model against its material.
 
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
@@ -32,6 +32,7 @@ pub mod mlp;
 pub mod pipeline;
 pub mod progress;
 pub mod reflow;
+mod tiles;
 
 pub use error::TrainError;
 pub use export::{model_from_nets, ModelExt};
