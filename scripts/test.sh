@@ -61,6 +61,14 @@ echo "== tests";   cargo test --release --workspace
 # distributions, the model definition, the declared incident range); the long numerical
 # suites (normalization 11 min unoptimised, shipped_models, pdf_consistency, isotropy,
 # bijectivity, blob) run in release above. About 80 s measured on 2 busy cores.
+# The kernel with fused multiply-add (the `fma` feature; RUSTFLAGS above target this CPU):
+# every shipped model stays exact, and the property and hard-case suites hold. A CPU
+# without FMA cannot run it, and says so.
+echo "== kernel with the fma feature"
+grep -qw fma /proc/cpuinfo || { echo "this CPU has no FMA: the fma feature cannot be tested here"; exit 1; }
+cargo test --release -p diffbsdf --features fma --lib --test shipped_models --test pdf_consistency \
+  --test bijectivity --test jacobian --test hard_cases --test robustness
+
 echo "== kernel tests in debug (overflow checks)"
 DIFFBSDF_FUZZ_INPUTS=2000 cargo test -p diffbsdf --lib \
   --test base_distributions --test fuzz_blob --test hard_cases --test incident_range \

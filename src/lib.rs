@@ -16,7 +16,8 @@
 //! ```
 //!
 //! ## Contract
-//! - `no_std`, no allocator, no `unsafe`.
+//! - `no_std`, no allocator, no `unsafe` (with the optional `fma` feature: one call of the
+//!   CPU's fused multiply-add intrinsic, in `math::mul_add`).
 //! - No panics on any input: a malformed blob is a [`BlobError`]; a NaN, infinite, zero or
 //!   non-unit direction, `u` outside [0, 1], or zero steps give `None` / a PDF of 0.
 //! - Exact: the PDF reported with a sample is the density of the discrete map that ran
@@ -28,7 +29,8 @@
 //! Frames: local shading frame, `z` the normal; `wi` points away from the surface.
 
 #![no_std]
-#![forbid(unsafe_code)]
+#![cfg_attr(not(feature = "fma"), forbid(unsafe_code))]
+#![cfg_attr(feature = "fma", deny(unsafe_code))]
 #![warn(missing_docs)]
 // `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values; the
 // "clearer" `x <= 0.0` would let NaN through.

@@ -1,7 +1,9 @@
 //! Fully connected layers. `Dense` stores its weights column by column (`w[i]` holds the
 //! weights leaving input `i`), so `z += w[i] * x[i]` runs down a whole layer at once and
 //! vectorises. `Readout` is the narrow last layer, stored row by row, evaluated as dot
-//! products.
+//! products. Every multiply-add goes through `math::mul_add` (fused with the `fma` feature).
+
+use crate::math::mul_add;
 
 /// `z = b + W x` with `W` of `O` rows and `I` columns, stored transposed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,7 +25,7 @@ impl<const I: usize, const O: usize> Dense<I, O> {
         let mut z = self.b;
         for (col, &xi) in self.w.iter().zip(x) {
             for (zo, &wo) in z.iter_mut().zip(col) {
-                *zo += wo * xi;
+                *zo = mul_add(wo, xi, *zo);
             }
         }
         z
@@ -38,9 +40,9 @@ impl<const I: usize, const O: usize> Dense<I, O> {
             let (xi, d0, d1) = (x[i], dx[0][i], dx[1][i]);
             let col = &self.w[i];
             for o in 0..O {
-                z[o] += col[o] * xi;
-                dz[0][o] += col[o] * d0;
-                dz[1][o] += col[o] * d1;
+                z[o] = mul_add(col[o], xi, z[o]);
+                dz[0][o] = mul_add(col[o], d0, dz[0][o]);
+                dz[1][o] = mul_add(col[o], d1, dz[1][o]);
             }
         }
         (z, dz)
@@ -89,11 +91,11 @@ fn dot<const N: usize>(a: &[f32; N], b: &[f32; N]) -> f32 {
     let mut cb = b.chunks_exact(LANES);
     for (xa, xb) in (&mut ca).zip(&mut cb) {
         for l in 0..LANES {
-            acc[l] += xa[l] * xb[l];
+            acc[l] = mul_add(xa[l], xb[l], acc[l]);
         }
     }
     for (l, (x, y)) in ca.remainder().iter().zip(cb.remainder()).enumerate() {
-        acc[l] += x * y;
+        acc[l] = mul_add(*x, *y, acc[l]);
     }
     let mut half = [0.0f32; LANES / 2];
     for l in 0..LANES / 2 {

@@ -11,6 +11,7 @@
 use super::activation::{silu_layer, silu_layer_tangents};
 use super::dense::{Dense, Readout};
 
+use crate::math::mul_add;
 use crate::spec::MAX_FEATURES;
 
 /// A 2x2 matrix, row-major: `j[r][c] = dv_r / dx_c`.
@@ -52,7 +53,7 @@ impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
     pub fn at_time(&self, cond: &[f32; W], t: f32) -> [f32; W] {
         let mut z = *cond;
         for (zo, &w) in z.iter_mut().zip(&self.wt) {
-            *zo += w * t;
+            *zo = mul_add(w, t, *zo);
         }
         z
     }
@@ -62,7 +63,7 @@ impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
         let mut z = *step;
         for (col, &f) in self.wx.iter().zip(&feat) {
             for (zo, &w) in z.iter_mut().zip(col) {
-                *zo += w * f;
+                *zo = mul_add(w, f, *zo);
             }
         }
         z
@@ -93,7 +94,7 @@ impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
         for (dz, df) in dh.iter_mut().zip(&dfeat) {
             for (col, &d) in self.wx.iter().zip(df) {
                 for (o, &w) in dz.iter_mut().zip(col) {
-                    *o += w * d;
+                    *o = mul_add(w, d, *o);
                 }
             }
         }
