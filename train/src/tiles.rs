@@ -125,36 +125,55 @@ pub(crate) fn transpose(params: &[f32], at: LayerAt, wt: &mut Vec<f32>) {
     }
 }
 
+/// The register tile a product runs on a stretch of its rows and vectors.
+#[derive(Clone, Copy, Debug)]
+enum Shape {
+    /// [`TILE_ROWS`] rows by [`TILE_VECS`] vectors.
+    Full,
+    /// [`TILE_ROWS`] rows by one vector (the last, odd vector).
+    Narrow,
+    /// One row by one vector (the last rows, fewer than a tile).
+    Single,
+}
+
+/// Covers `rows` rows (or outputs) by `vecs` vectors of 8 with register tiles, calling
+/// `run(shape, first row, first vector)` for each; every entry is in exactly one tile.
+#[inline(always)]
+fn for_each_tile(rows: usize, vecs: usize, mut run: impl FnMut(Shape, usize, usize)) {
+    let mut r = 0;
+    while r < rows {
+        let tile_rows = (rows - r).min(TILE_ROWS);
+        let mut k = 0;
+        while k < vecs {
+            let tile_vecs = (vecs - k).min(TILE_VECS);
+            match (tile_rows, tile_vecs) {
+                (TILE_ROWS, TILE_VECS) => run(Shape::Full, r, k),
+                (TILE_ROWS, _) => run(Shape::Narrow, r, k),
+                _ => {
+                    for rr in r..r + tile_rows {
+                        for kk in k..k + tile_vecs {
+                            run(Shape::Single, rr, kk);
+                        }
+                    }
+                }
+            }
+            k += tile_vecs;
+        }
+        r += tile_rows;
+    }
+}
+
 #[inline(always)]
 fn affine_body(params: &[f32], at: LayerAt, wt: &[f32], a: &[f32], z: &mut [f32]) {
     let (n_in, n_out) = (at.n_in, at.n_out);
     let b = &params[at.b..at.b + n_out];
     let rows = a.len() / n_in.max(1);
     let blocks = n_out.div_ceil(LANES);
-    let mut r = 0;
-    while r < rows {
-        let tile = (rows - r).min(TILE_ROWS);
-        let mut k = 0;
-        while k < blocks {
-            let vecs = (blocks - k).min(TILE_VECS);
-            match (tile, vecs) {
-                (TILE_ROWS, TILE_VECS) => {
-                    affine_tile::<TILE_ROWS, TILE_VECS>(b, wt, n_in, n_out, a, z, r, k)
-                }
-                (TILE_ROWS, _) => affine_tile::<TILE_ROWS, 1>(b, wt, n_in, n_out, a, z, r, k),
-                _ => {
-                    for rr in r..r + tile {
-                        affine_tile::<1, 1>(b, wt, n_in, n_out, a, z, rr, k);
-                        if vecs == 2 {
-                            affine_tile::<1, 1>(b, wt, n_in, n_out, a, z, rr, k + 1);
-                        }
-                    }
-                }
-            }
-            k += vecs;
-        }
-        r += tile;
-    }
+    for_each_tile(rows, blocks, |shape, r, k| match shape {
+        Shape::Full => affine_tile::<TILE_ROWS, TILE_VECS>(b, wt, n_in, n_out, a, z, r, k),
+        Shape::Narrow => affine_tile::<TILE_ROWS, 1>(b, wt, n_in, n_out, a, z, r, k),
+        Shape::Single => affine_tile::<1, 1>(b, wt, n_in, n_out, a, z, r, k),
+    });
 }
 
 /// A row's inputs `8 j + l` as `[j][l]`, and its last inputs (fewer than 8).
@@ -262,35 +281,27 @@ fn weight_grad_body(dz: &[f32], a: &[f32], at: LayerAt, rows: usize, grad: &mut 
     let (n_in, n_out) = (at.n_in, at.n_out);
     let gw = &mut grad[at.w..at.b];
     let full = n_in - n_in % LANES;
-    let mut o = 0;
-    while o < n_out {
-        let outs = (n_out - o).min(TILE_ROWS);
-        let mut c = 0;
-        while c < full {
-            let vecs = ((full - c) / LANES).min(TILE_VECS);
-            match (outs, vecs) {
-                (TILE_ROWS, TILE_VECS) => {
-                    grad_tile::<TILE_ROWS, TILE_VECS>(dz, a, gw, n_in, n_out, rows, o, c)
-                }
-                (TILE_ROWS, _) => grad_tile::<TILE_ROWS, 1>(dz, a, gw, n_in, n_out, rows, o, c),
-                _ => {
-                    for oo in o..o + outs {
-                        for v in 0..vecs {
-                            grad_tile::<1, 1>(dz, a, gw, n_in, n_out, rows, oo, c + v * LANES);
-                        }
-                    }
-                }
-            }
-            c += vecs * LANES;
+    let op = GradOperands {
+        dz,
+        a,
+        n_in,
+        n_out,
+        rows,
+    };
+    for_each_tile(n_out, full / LANES, |shape, o, v| {
+        let c = v * LANES;
+        match shape {
+            Shape::Full => grad_tile::<TILE_ROWS, TILE_VECS>(op, gw, o, c),
+            Shape::Narrow => grad_tile::<TILE_ROWS, 1>(op, gw, o, c),
+            Shape::Single => grad_tile::<1, 1>(op, gw, o, c),
         }
-        o += outs;
-    }
+    });
     // The last inputs (fewer than a vector): eight outputs at a time down the rows, then
     // the last outputs one entry at a time; rows in order.
     let mut o = 0;
     while o + LANES <= n_out {
         for i in full..n_in {
-            grad_column(dz, a, gw, n_in, n_out, rows, o, i);
+            grad_column(op, gw, o, i);
         }
         o += LANES;
     }
@@ -305,19 +316,20 @@ fn weight_grad_body(dz: &[f32], a: &[f32], at: LayerAt, rows: usize, grad: &mut 
     }
 }
 
-/// Outputs `o0..o0 + 8` at input `i` of [`weight_grad`], in one register across the rows.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn grad_column(
-    dz: &[f32],
-    a: &[f32],
-    gw: &mut [f32],
+/// The operands of [`weight_grad`]: `dz` (`rows x n_out`) and `a` (`rows x n_in`).
+#[derive(Clone, Copy, Debug)]
+struct GradOperands<'a> {
+    dz: &'a [f32],
+    a: &'a [f32],
     n_in: usize,
     n_out: usize,
     rows: usize,
-    o0: usize,
-    i: usize,
-) {
+}
+
+/// Outputs `o0..o0 + 8` at input `i` of [`weight_grad`], in one register across the rows.
+#[inline(always)]
+fn grad_column(op: GradOperands, gw: &mut [f32], o0: usize, i: usize) {
+    let (dz, a, n_in, n_out, rows) = (op.dz, op.a, op.n_in, op.n_out, op.rows);
     let mut acc = Lanes::ZERO;
     for (k, g) in acc.0.iter_mut().enumerate() {
         *g = gw[(o0 + k) * n_in + i];
@@ -333,17 +345,13 @@ fn grad_column(
 /// Outputs `o0..o0 + R`, inputs `c0..c0 + 8 C` of [`weight_grad`], in registers across the
 /// rows.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn grad_tile<const R: usize, const C: usize>(
-    dz: &[f32],
-    a: &[f32],
+    op: GradOperands,
     gw: &mut [f32],
-    n_in: usize,
-    n_out: usize,
-    rows: usize,
     o0: usize,
     c0: usize,
 ) {
+    let (dz, a, n_in, n_out, rows) = (op.dz, op.a, op.n_in, op.n_out, op.rows);
     let mut acc = [[Lanes::ZERO; C]; R];
     for (j, acc_j) in acc.iter_mut().enumerate() {
         for (c, acc_jc) in acc_j.iter_mut().enumerate() {
@@ -376,29 +384,14 @@ fn transpose_times_body(params: &[f32], at: LayerAt, dz: &[f32], rows: usize, da
     let (n_in, n_out) = (at.n_in, at.n_out);
     let w = &params[at.w..at.b];
     let full = n_in - n_in % LANES;
-    let mut r = 0;
-    while r < rows {
-        let tile = (rows - r).min(TILE_ROWS);
-        let mut c = 0;
-        while c < full {
-            let vecs = ((full - c) / LANES).min(TILE_VECS);
-            match (tile, vecs) {
-                (TILE_ROWS, TILE_VECS) => {
-                    times_tile::<TILE_ROWS, TILE_VECS>(w, dz, da, n_in, n_out, r, c)
-                }
-                (TILE_ROWS, _) => times_tile::<TILE_ROWS, 1>(w, dz, da, n_in, n_out, r, c),
-                _ => {
-                    for rr in r..r + tile {
-                        for v in 0..vecs {
-                            times_tile::<1, 1>(w, dz, da, n_in, n_out, rr, c + v * LANES);
-                        }
-                    }
-                }
-            }
-            c += vecs * LANES;
+    for_each_tile(rows, full / LANES, |shape, r, v| {
+        let c = v * LANES;
+        match shape {
+            Shape::Full => times_tile::<TILE_ROWS, TILE_VECS>(w, dz, da, n_in, n_out, r, c),
+            Shape::Narrow => times_tile::<TILE_ROWS, 1>(w, dz, da, n_in, n_out, r, c),
+            Shape::Single => times_tile::<1, 1>(w, dz, da, n_in, n_out, r, c),
         }
-        r += tile;
-    }
+    });
     // The last inputs (fewer than a vector) one entry at a time, outputs in order.
     for k in 0..rows {
         for i in full..n_in {
