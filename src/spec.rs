@@ -52,6 +52,12 @@ pub const STATUS_OK: i32 = 0;
 /// sample left the domain); its outputs are then zero.
 pub const STATUS_NO_SAMPLE: i32 = 1;
 
+/// Partial sums of the readout's dot products (kernel) and of the trainer's: sum `l` takes
+/// the inputs `i = l (mod DOT_PARTIAL_SUMS)` in order, and the sums are added as
+/// `((s0 + s4) + (s2 + s6)) + ((s1 + s5) + (s3 + s7))`. Lets a dot product vectorise
+/// without reassociating floats; the trainer's passes rely on this order for their bits.
+pub const DOT_PARTIAL_SUMS: usize = 8;
+
 /// Most Euler steps a call may ask for, and a blob may declare as its default: bounds the
 /// work of one call (a larger count gives an invalid result, a blob declaring one is
 /// rejected). Trained models use 1 to 16.

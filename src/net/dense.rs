@@ -79,9 +79,8 @@ impl<const I: usize, const O: usize> Dense<I, O> {
     }
 }
 
-/// Lanes of the partial sums in a dot product: lets the compiler vectorise a reduction
-/// without reassociating floats.
-const LANES: usize = 8;
+/// Lanes of the partial sums in a dot product (`spec::DOT_PARTIAL_SUMS`).
+const LANES: usize = crate::spec::DOT_PARTIAL_SUMS;
 
 /// `sum_i a[i] * b[i]` with `LANES` interleaved partial sums.
 #[inline(always)]

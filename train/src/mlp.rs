@@ -220,14 +220,19 @@ fn axpy(a: f32, x: &[f32], y: &mut [f32]) {
     }
 }
 
-/// Dot product with 8 interleaved partial sums (vectorises without reassociation).
+/// Partial sums of [`dot`] (`spec::DOT_PARTIAL_SUMS`; [`reduce8`] names all eight).
+const PARTIAL_SUMS: usize = diffbsdf::spec::DOT_PARTIAL_SUMS;
+const _: () = assert!(PARTIAL_SUMS == 8);
+
+/// Dot product with the kernel's 8 interleaved partial sums (vectorises without
+/// reassociation).
 #[inline]
 pub(crate) fn dot(a: &[f32], b: &[f32]) -> f32 {
-    let mut acc = [0.0f32; 8];
-    let mut ca = a.chunks_exact(8);
-    let mut cb = b.chunks_exact(8);
+    let mut acc = [0.0f32; PARTIAL_SUMS];
+    let mut ca = a.chunks_exact(PARTIAL_SUMS);
+    let mut cb = b.chunks_exact(PARTIAL_SUMS);
     for (xa, xb) in (&mut ca).zip(&mut cb) {
-        for l in 0..8 {
+        for l in 0..PARTIAL_SUMS {
             acc[l] += xa[l] * xb[l];
         }
     }

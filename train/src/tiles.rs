@@ -16,8 +16,10 @@
 
 use crate::mlp::LayerAt;
 
-/// Floats per vector.
-pub(crate) const LANES: usize = 8;
+/// Floats per vector: one per partial sum of the kernel's dot product.
+pub(crate) const LANES: usize = diffbsdf::spec::DOT_PARTIAL_SUMS;
+// The reduction below names the eight partial sums.
+const _: () = assert!(LANES == 8);
 /// Rows (outputs, for the weight gradient) per register tile.
 const TILE_ROWS: usize = 6;
 /// Vectors of 8 per register tile.
