@@ -177,6 +177,8 @@ pub enum CommandError {
     Sweep(crate::tradeoff::SweepError),
     /// `fit` found no step count at which the model's `pdf()` is exact (what it checked).
     NotExact(String),
+    /// Arguments that make no sense together (what is wrong).
+    Usage(String),
 }
 
 impl fmt::Display for CommandError {
@@ -191,6 +193,7 @@ impl fmt::Display for CommandError {
             CommandError::Catalog(e) => write!(f, "{e}"),
             CommandError::Sweep(e) => write!(f, "{e}"),
             CommandError::NotExact(e) => write!(f, "{e}"),
+            CommandError::Usage(e) => write!(f, "{e}"),
         }
     }
 }
@@ -299,15 +302,20 @@ pub fn print_json<T: Serialize>(
     writeln!(out, "{s}").map_err(CommandError::Output)
 }
 
+/// The recipe a fit starts from: `--tiny`, `--quick` or the standard one.
+pub fn recipe(tiny: bool, quick: bool, domain: Domain, seed: u64) -> FitConfig {
+    if tiny {
+        FitConfig::tiny(domain, seed)
+    } else if quick {
+        FitConfig::quick(domain, seed)
+    } else {
+        FitConfig::standard(domain, seed)
+    }
+}
+
 /// The fit configuration the arguments ask for, on `domain`.
 pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
-    let mut c = if args.tiny {
-        FitConfig::tiny(domain, args.seed)
-    } else if args.quick {
-        FitConfig::quick(domain, args.seed)
-    } else {
-        FitConfig::standard(domain, args.seed)
-    };
+    let mut c = recipe(args.tiny, args.quick, domain, args.seed);
     let set = |dst: &mut usize, v: Option<usize>| {
         if let Some(v) = v {
             *dst = v.max(1);

@@ -4,6 +4,7 @@
 pub mod blob;
 pub mod choose;
 pub mod codegen;
+pub mod curve;
 pub mod demo;
 pub mod eval;
 pub mod fit;
@@ -22,7 +23,7 @@ pub struct Cli {
     pub command: Command,
 }
 
-/// Top-level subcommands. New ones (fit, eval, demo, codegen, tradeoff) add a variant
+/// Top-level subcommands. New ones (fit, eval, demo, codegen, tradeoff, curve) add a variant
 /// here and a module beside this file.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -43,6 +44,9 @@ pub enum Command {
     Codegen(codegen::CodegenArgs),
     /// What accuracy costs in time: the shipped models over steps and precision.
     Tradeoff(tradeoff::TradeoffArgs),
+    /// What accuracy costs in training: one material fitted at several teacher lengths
+    /// and student depths.
+    Curve(curve::CurveArgs),
 }
 
 /// Errors the command line reports before exiting with a failure status.
@@ -82,5 +86,6 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), CliError> {
         Command::Demo(a) => demo::run(a, out).map_err(CliError::Train),
         Command::Codegen(a) => codegen::run(&a, out).map_err(CliError::Codegen),
         Command::Tradeoff(a) => tradeoff::run(a, out).map_err(CliError::Train),
+        Command::Curve(a) => curve::run(a, out).map_err(CliError::Train),
     }
 }

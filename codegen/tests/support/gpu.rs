@@ -1,6 +1,10 @@
 //! Runs generated shaders as compute shaders on lavapipe (Mesa's software Vulkan driver)
 //! through wgpu: WGSL through wgpu's own front end, GLSL as glslang's SPIR-V through
-//! wgpu's SPIR-V passthrough.
+//! naga's SPIR-V front end (wgpu then writes the SPIR-V lavapipe compiles, as for WGSL).
+//! Handed to lavapipe as is (passthrough), glslang's SPIR-V of f16 and of `sample` /
+//! `pdf` shaders takes lavapipe minutes to tens of minutes to compile at the first
+//! dispatch on two cores (more than 5 minutes for an f16 sphere direction shader, with or
+//! without `precise` and after `spirv-opt -O`); translated, seconds.
 #![allow(dead_code)]
 
 use std::borrow::Cow;
@@ -13,10 +17,13 @@ pub struct Gpu {
     pub name: String,
     layout: wgpu::PipelineLayout,
     bgl: wgpu::BindGroupLayout,
+    /// The same buffers all read-write, for shaders from naga's SPIR-V front end (it reads
+    /// glslang's `readonly` blocks as read-write; wgpu wants the access to match exactly).
+    layout_rw: wgpu::PipelineLayout,
 }
 
-/// The lavapipe device with f16 and SPIR-V passthrough; fails (never skips) when there is
-/// none, saying what to install.
+/// The lavapipe device with f16; fails (never skips) when there is none, saying what to
+/// install.
 pub fn lavapipe() -> Gpu {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = wgpu::Backends::VULKAN;
@@ -32,7 +39,7 @@ pub fn lavapipe() -> Gpu {
             )
         });
     let name = adapter.get_info().name;
-    let needed = wgpu::Features::SHADER_F16 | wgpu::Features::PASSTHROUGH_SHADERS;
+    let needed = wgpu::Features::SHADER_F16;
     assert!(
         adapter.features().contains(needed),
         "{name} lacks {:?}: a newer `{LAVAPIPE_HINT}` is needed",
@@ -51,9 +58,7 @@ impl Gpu {
             label: Some("diffbsdf conformance"),
             required_features: needed,
             required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
-            // SAFETY (of the flag): passthrough shaders are only given SPIR-V that spirv-val
-            // accepted.
-            experimental_features: unsafe { wgpu::ExperimentalFeatures::enabled() },
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         };
@@ -69,21 +74,31 @@ impl Gpu {
             },
             count: None,
         };
-        let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: None,
-            entries: &[storage(0, true), storage(1, true), storage(2, false)],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: None,
-            bind_group_layouts: &[Some(&bgl)],
-            immediate_size: 0,
-        });
+        let layout_of = |read_only: bool| {
+            let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: None,
+                entries: &[
+                    storage(0, read_only),
+                    storage(1, read_only),
+                    storage(2, false),
+                ],
+            });
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: None,
+                bind_group_layouts: &[Some(&bgl)],
+                immediate_size: 0,
+            });
+            (bgl, layout)
+        };
+        let (bgl, layout) = layout_of(true);
+        let (_, layout_rw) = layout_of(false);
         Gpu {
             device,
             queue,
             name,
             layout,
             bgl,
+            layout_rw,
         }
     }
 
@@ -95,27 +110,36 @@ impl Gpu {
             })
     }
 
-    pub fn spirv(&self, words: Vec<u32>) -> wgpu::ShaderModule {
-        let desc = wgpu::ShaderModuleDescriptorPassthrough {
-            label: None,
-            entry_points: Cow::Owned(vec![wgpu::PassthroughShaderEntryPoint {
-                name: Cow::Borrowed("main"),
-                workgroup_size: (64, 1, 1),
-            }]),
-            spirv: Some(Cow::Owned(words)),
-            ..Default::default()
-        };
-        // SAFETY: the words come from glslangValidator and passed spirv-val.
-        unsafe { self.device.create_shader_module_passthrough(desc) }
+    /// SPIR-V (glslang's, validated by spirv-val) through naga's SPIR-V front end.
+    pub fn spirv(&self, words: &[u32]) -> wgpu::ShaderModule {
+        self.device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: None,
+                source: wgpu::ShaderSource::SpirV(Cow::Borrowed(words)),
+            })
     }
 
-    /// The compute pipeline of `module`'s `main`: the driver compiles the shader here,
-    /// once, however many times it then runs.
+    /// The compute pipeline of `module`'s `main` (a WGSL module: parameters and inputs
+    /// read-only): the driver compiles the shader here, once, however many times it then
+    /// runs.
     pub fn pipeline(&self, module: &wgpu::ShaderModule) -> wgpu::ComputePipeline {
+        self.pipeline_in(module, &self.layout)
+    }
+
+    /// [`Gpu::pipeline`] for a module from [`Gpu::spirv`] (every buffer read-write).
+    pub fn spirv_pipeline(&self, module: &wgpu::ShaderModule) -> wgpu::ComputePipeline {
+        self.pipeline_in(module, &self.layout_rw)
+    }
+
+    fn pipeline_in(
+        &self,
+        module: &wgpu::ShaderModule,
+        layout: &wgpu::PipelineLayout,
+    ) -> wgpu::ComputePipeline {
         self.device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: None,
-                layout: Some(&self.layout),
+                layout: Some(layout),
                 module,
                 entry_point: Some("main"),
                 compilation_options: Default::default(),
@@ -169,7 +193,7 @@ impl Gpu {
         });
         let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
-            layout: &self.bgl,
+            layout: &pipeline.get_bind_group_layout(0),
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
