@@ -201,15 +201,15 @@ fn point(
     })
 }
 
-/// The report's table.
-fn markdown(record: &CurveRecord) -> String {
+/// The report's table, with the plot at `svg` (a path relative to the report).
+fn markdown(record: &CurveRecord, svg: &str) -> String {
     let mut s = format!(
         "# What accuracy costs in training: `{}`\n\nProduced by `{}` ({} samples per `wi`, {} logical cores; metrics as in `docs/math.md`, \"Metrics\"). Each row is a whole fit from the same seed; quality at the step count the student was trained for, without the exactness sweep that `fit` runs before it ships a step count. Training minutes are wall time of the whole fit on this machine.\n\n![mean RV against training minutes]({})\n\n",
         record.material,
         record.command,
         record.samples,
         record.cores,
-        "NAME.svg"
+        svg
     );
     s += "| student | teacher iterations | training min (teacher) | N | f32 bytes | mean RV f32 | worst RV (theta_i) | fireflies mean / worst | mean RV f16 | / material's sampler |\n";
     s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -373,7 +373,7 @@ pub fn run(args: CurveArgs, out: &mut dyn std::io::Write) -> Result<(), CommandE
         points,
     };
     let name = stem(&args);
-    let md = markdown(&record).replace("NAME.svg", &format!("{name}.svg"));
+    let md = markdown(&record, &format!("{name}.svg"));
     write_file(&args.out.join(format!("{name}.md")), md.as_bytes())?;
     let json =
         serde_json::to_string_pretty(&record).map_err(|e| CommandError::Json(e.to_string()))?;
