@@ -28,11 +28,14 @@ rustup toolchain list | grep -q "^${msrv}-" || rustup toolchain install "$msrv" 
 # (no contraction), only speed differs. The C library's portability is checked below.
 export RUSTFLAGS="${RUSTFLAGS:--C target-cpu=native}"
 
-echo "== format";  cargo fmt --all -- --check
-echo "== clippy";  cargo clippy --workspace --all-targets -- -D warnings
-echo "== no_std kernel on bare metal"; env -u RUSTFLAGS cargo build -p diffbsdf --target thumbv7em-none-eabihf
-echo "== kernel and C ABI on Rust $msrv"; CARGO_TARGET_DIR=target/msrv cargo +"$msrv" build -p diffbsdf -p diffbsdf-ffi
-echo "== C library on baseline x86-64 (no AVX assumed), running the C example"
+# Each section prints the seconds since the start, so a log shows where the time goes.
+section() { echo "== $1 (${SECONDS} s)"; }
+
+section "format";  cargo fmt --all -- --check
+section "clippy";  cargo clippy --workspace --all-targets -- -D warnings
+section "no_std kernel on bare metal"; env -u RUSTFLAGS cargo build -p diffbsdf --target thumbv7em-none-eabihf
+section "kernel and C ABI on Rust $msrv"; CARGO_TARGET_DIR=target/msrv cargo +"$msrv" build -p diffbsdf -p diffbsdf-ffi
+section "C library on baseline x86-64 (no AVX assumed), running the C example"
 env -u RUSTFLAGS CARGO_TARGET_DIR=target/baseline cargo build --release -p diffbsdf-ffi
 gcc -std=c99 -Wall -Wextra -pedantic -Werror -I ffi/include ffi/examples/sample.c \
   target/baseline/release/libdiffbsdf_ffi.a -lm -lpthread -ldl -o target/baseline/sample
@@ -53,8 +56,8 @@ objdump -d target/baseline/release/libdiffbsdf_ffi.a | awk '
 env -u RUSTFLAGS CARGO_TARGET_DIR=target/baseline cargo test --release -p diffbsdf-ffi --test parallel --test slices
 # So do the trainer's matrix products (its AVX2 copy against the one built for baseline).
 env -u RUSTFLAGS CARGO_TARGET_DIR=target/baseline cargo test --release -p diffbsdf-train --lib tiles
-echo "== docs";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p diffbsdf -p diffbsdf-ffi -p diffbsdf-codegen
-echo "== tests";   cargo test --release --workspace
+section "docs";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p diffbsdf -p diffbsdf-ffi -p diffbsdf-codegen
+section "tests";   cargo test --release --workspace
 # The kernel's input-facing tests once more without --release: debug assertions and
 # overflow checks on (profile.test, opt-level 1). The targets that exercise parsing and
 # edge inputs (the blob fuzzer with 2 000 inputs, robustness, hard cases, base
@@ -64,17 +67,17 @@ echo "== tests";   cargo test --release --workspace
 # The kernel with fused multiply-add (the `fma` feature; RUSTFLAGS above target this CPU):
 # every shipped model stays exact, and the property and hard-case suites hold. A CPU
 # without FMA cannot run it, and says so.
-echo "== kernel with the fma feature"
+section "kernel with the fma feature"
 grep -qw fma /proc/cpuinfo || { echo "this CPU has no FMA: the fma feature cannot be tested here"; exit 1; }
 cargo test --release -p diffbsdf --features fma --lib --test shipped_models --test pdf_consistency \
   --test bijectivity --test jacobian --test hard_cases --test robustness
 
-echo "== kernel tests in debug (overflow checks)"
+section "kernel tests in debug (overflow checks)"
 DIFFBSDF_FUZZ_INPUTS=2000 cargo test -p diffbsdf --lib \
   --test base_distributions --test fuzz_blob --test hard_cases --test incident_range \
   --test jacobian --test model_def --test robustness
 
-echo "== python package (numpy API, Mitsuba 3 plugin)"
+section "python package (numpy API, Mitsuba 3 plugin)"
 # A venv under target/ (gitignored); pip and maturin skip what is already there.
 # Mitsuba's LLVM variants load libLLVM at run time: Debian's libllvm19.
 llvm_so=/usr/lib/x86_64-linux-gnu/libLLVM-19.so
@@ -89,3 +92,4 @@ pyvenv=target/pyvenv
   "maturin>=1.5,<2" "numpy>=1.24" "mitsuba==3.9.1" "pytest>=7"
 VIRTUAL_ENV="$PWD/$pyvenv" "$pyvenv/bin/maturin" develop --release -q -m python/Cargo.toml
 DRJIT_LIBLLVM_PATH="$llvm_so" "$pyvenv/bin/python" -m pytest -q python/tests
+section "done"
