@@ -35,6 +35,9 @@ pub struct TrainingSet {
     pub x1: Vec<[f32; 2]>,
     /// The pairs are in the incident frame (see [`TrainingData::isotropic`]).
     pub isotropic: bool,
+    /// Start of each run of consecutive pairs with the same `wi` (bit for bit), then the
+    /// number of pairs.
+    run_starts: Vec<usize>,
 }
 
 impl TrainingSet {
@@ -49,15 +52,32 @@ impl TrainingSet {
             enc: Vec::with_capacity(pairs.len() * encoding_len(freqs)),
             x1: Vec::with_capacity(pairs.len()),
             isotropic: false,
+            run_starts: Vec::new(),
         };
         for &(wi, x1) in pairs {
             if wi.iter().chain(&x1).all(|v| v.is_finite()) {
+                let same =
+                    |w: &[f32; 3]| w.iter().zip(&wi).all(|(a, b)| a.to_bits() == b.to_bits());
+                if !set.wi.last().is_some_and(same) {
+                    set.run_starts.push(set.wi.len());
+                }
                 set.wi.push(wi);
                 push_encoding(wi, freqs, &mut set.enc);
                 set.x1.push(x1);
             }
         }
+        set.run_starts.push(set.wi.len());
         set
+    }
+
+    /// Number of runs of consecutive pairs that share one `wi`.
+    pub fn runs(&self) -> usize {
+        self.run_starts.len() - 1
+    }
+
+    /// The pairs of run `r` (`r < runs()`).
+    pub fn run(&self, r: usize) -> std::ops::Range<usize> {
+        self.run_starts[r]..self.run_starts[r + 1]
     }
 
     /// From the materials' pair generator.
@@ -111,6 +131,9 @@ pub struct MaterialPairs<'a> {
     /// Isotropic fits: fraction of `wi` drawn with `theta_i` uniform in angle (the rest
     /// uniform in solid angle).
     pub angle_fraction: f64,
+    /// Consecutive pairs sharing one `wi` (1: every pair its own; see
+    /// [`ExactConfig::group`]).
+    pub group: usize,
 }
 
 impl TrainingData for MaterialPairs<'_> {
@@ -120,6 +143,7 @@ impl TrainingData for MaterialPairs<'_> {
             domain: self.domain,
             candidates: 64,
             seed: self.seed,
+            group: self.group,
         };
         let band = Band::split(1, both)[0];
         // Isotropic fits see theta_i alone: draw it uniform in angle, so normal incidence

@@ -18,6 +18,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod adam;
+pub mod assignment;
 pub mod base_fit;
 pub mod batch;
 pub mod block;

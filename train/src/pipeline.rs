@@ -110,6 +110,7 @@ impl FitConfig {
                 lr: 2e-3,
                 ema: 0.999,
                 t_grid: 0,
+                ot_group: 0,
             },
             reflow_pairs: 100_000,
             reflow_steps: 16,
@@ -119,6 +120,7 @@ impl FitConfig {
                 lr: 2e-3,
                 ema: 0.999,
                 t_grid: 0,
+                ot_group: 0,
             },
             student_euler_times: true,
             grazing: 0.0,
@@ -256,6 +258,7 @@ pub fn fit_material(
         grazing: cfg.grazing,
         isotropic: cfg.use_isotropy && material.is_isotropic(),
         angle_fraction: cfg.angle_fraction,
+        group: cfg.teacher.ot_group.max(1),
     };
     let data = TrainingSet::from_source(cfg.domain(), cfg.freqs(), &source);
     progress.advance(cfg.pairs as u64, None);

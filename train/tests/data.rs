@@ -86,6 +86,7 @@ fn exact_and_mcmc_pairs_match_the_target() {
                 domain: *domain,
                 candidates: 64,
                 seed: 11 + (s * 10 + b) as u64,
+                group: 1,
             };
             let g = exact_pairs_for_wi(m, wi, N, &cfg);
             let exp = expected(m, *domain, &[(wi, 1.0)], &bins);

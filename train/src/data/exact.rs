@@ -23,6 +23,9 @@ pub struct ExactConfig {
     pub candidates: usize,
     /// Seed; the output is a deterministic function of it.
     pub seed: u64,
+    /// Consecutive pairs that share one `wi` (1: a fresh `wi` for every pair). Groups
+    /// let the teacher couple `x0` and `x1` by optimal transport at a fixed `wi`.
+    pub group: usize,
 }
 
 impl Default for ExactConfig {
@@ -31,6 +34,7 @@ impl Default for ExactConfig {
             domain: Domain::Disk,
             candidates: 64,
             seed: 0,
+            group: 1,
         }
     }
 }
@@ -106,14 +110,22 @@ where
             let mut out = Vec::with_capacity(want);
             let (mut evals, mut valid) = (0u64, 0u64);
             let mut tries = 0usize;
+            let group = cfg.group.max(1);
+            let (mut wi, mut in_group) = (DVec3::ZERO, group);
             while out.len() < want && tries < want * 100 + 100 {
                 tries += 1;
-                let wi = draw_wi(&mut rng);
+                // A fresh wi for every try (the random stream of ungrouped fits), or for
+                // groups whenever the current one is full.
+                if group == 1 || in_group == group {
+                    wi = draw_wi(&mut rng);
+                    in_group = 0;
+                }
                 let (wo, v) = resample_one(m, wi, cfg, &mut rng);
                 evals += cfg.candidates.max(1) as u64;
                 valid += v;
                 if let Some(wo) = wo {
                     out.push(Pair { wi, wo });
+                    in_group += 1;
                 }
             }
             (out, evals, valid)
