@@ -15,6 +15,10 @@ pub enum Domain {
     /// sin t sin p)`, so the normal and the plane of incidence (of an isotropic model) lie
     /// on the chart's equator, away from its poles (`docs/math.md`, §4.3).
     Equatorial,
+    /// The half vector `h = (wi + wo) / |wi + wo|` on the projected unit disk, `x = (h.x,
+    /// h.y)`: reflection only, upper hemisphere (measured and glossy BRDFs; `docs/math.md`,
+    /// §4.4). Features, base distribution and steps are the disk's.
+    HalfVector,
 }
 
 impl Domain {
@@ -23,7 +27,7 @@ impl Domain {
     #[must_use]
     pub const fn feature_count(self) -> usize {
         match self {
-            Domain::Disk => 2,
+            Domain::Disk | Domain::HalfVector => 2,
             Domain::Sphere | Domain::Equatorial => 3,
         }
     }
@@ -36,11 +40,25 @@ impl Domain {
         matches!(self, Domain::Sphere | Domain::Equatorial)
     }
 
-    pub(crate) const fn code(self) -> u8 {
+    /// The domain's name in reports, file names and the Python and CLI interfaces.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Domain::Disk => "disk",
+            Domain::Sphere => "sphere",
+            Domain::Equatorial => "equatorial",
+            Domain::HalfVector => "half-vector",
+        }
+    }
+
+    /// The domain's code in the blob header, also `diffbsdf_info.domain` in the C ABI.
+    #[must_use]
+    pub const fn code(self) -> u8 {
         match self {
             Domain::Disk => 0,
             Domain::Sphere => 1,
             Domain::Equatorial => 2,
+            Domain::HalfVector => 3,
         }
     }
 
@@ -49,6 +67,7 @@ impl Domain {
             0 => Some(Domain::Disk),
             1 => Some(Domain::Sphere),
             2 => Some(Domain::Equatorial),
+            3 => Some(Domain::HalfVector),
             _ => None,
         }
     }

@@ -99,7 +99,7 @@ impl<
         let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
         let x = self.flow(&c, c.base.sample(u), steps);
-        let wo = self.def.domain.to_direction(x)?;
+        let wo = self.def.domain.to_direction(x, wi)?;
         Some(frame.to_world(wo)).filter(|wo| wo.is_finite())
     }
 
@@ -114,9 +114,9 @@ impl<
         let c = self.condition(wi);
         let x0 = c.base.sample(u);
         let (x, ln_det) = self.flow_with_ln_det(&c, x0, steps)?;
-        let wo = self.def.domain.to_direction(x)?;
+        let wo = self.def.domain.to_direction(x, wi)?;
         // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (docs/math.md, (38))
-        let ln_pdf = c.base.ln_pdf(x0) - ln_det + self.def.domain.ln_measure(x, wo);
+        let ln_pdf = c.base.ln_pdf(x0) - ln_det + self.def.domain.ln_measure(x, wo, wi);
         let pdf = exp(ln_pdf);
         let wo = frame.to_world(wo);
         (wo.is_finite() && pdf.is_finite() && pdf > 0.0).then_some(Sample { wo, pdf })
@@ -137,10 +137,10 @@ impl<
         let domain = self.def.domain;
         let (frame, wi) = self.incident_frame(wi);
         let wo = frame.to_local(wo);
-        let y = domain.point_of(wo)?;
+        let y = domain.point_of(wo, wi)?;
         let c = self.condition(wi);
         let (x0, ln_det) = self.flow_inverse(&c, y, steps)?;
-        let ln_pdf = c.base.ln_pdf(x0) - ln_det + domain.ln_measure(y, wo);
+        let ln_pdf = c.base.ln_pdf(x0) - ln_det + domain.ln_measure(y, wo, wi);
         let pdf = exp(ln_pdf);
         pdf.is_finite().then_some(pdf)
     }

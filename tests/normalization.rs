@@ -5,7 +5,10 @@ mod support;
 
 use diffbsdf::glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
-use support::{direction, random_disk, random_isotropic_equatorial, random_sphere};
+use support::{
+    direction, random_disk, random_isotropic_equatorial, random_isotropic_half_vector,
+    random_sphere,
+};
 
 /// Allowed error of `integral + lost mass` against 1.
 const NORMALIZATION_TOL: f64 = 1e-3;
@@ -124,5 +127,24 @@ fn equatorial_pdf_integrates_to_one_minus_lost_mass() {
         let integral = equatorial_integral(|wo| m.pdf_steps(wi, wo, steps));
         let lost = lost_mass(|u| m.sample_direction_steps(wi, u, steps).is_some());
         check_total(&format!("equatorial seed {seed}"), integral, lost);
+    }
+}
+
+/// The half-vector chart: its density per solid angle of `wo` (the measure change
+/// `h.z / (4 wi.h)` included) integrates to the kept mass. Quadrature in (theta, phi): unlike
+/// the disk's, this density does not vanish at the horizon, so `pdf_w / cos(theta)` on the
+/// projected disk would have an integrable singularity at the rim.
+#[test]
+fn half_vector_pdf_integrates_to_one_minus_lost_mass() {
+    for (seed, steps, a, b) in [
+        (31u64, 4u32, 0.2f32, 0.1f32),
+        (32, 2, 0.8, 0.5),
+        (33, 8, 0.02, 0.8),
+    ] {
+        let m = random_isotropic_half_vector(seed, 2);
+        let wi = direction(a, b, true);
+        let integral = sphere_integral(|wo| m.pdf_steps(wi, wo, steps));
+        let lost = lost_mass(|u| m.sample_direction_steps(wi, u, steps).is_some());
+        check_total(&format!("half vector seed {seed}"), integral, lost);
     }
 }

@@ -7,8 +7,9 @@ use diffbsdf::glam::Vec2;
 use diffbsdf::internals::Diagnostics;
 use proptest::prelude::*;
 use support::{
-    direction, random_disk, random_equatorial, random_isotropic_disk, random_isotropic_equatorial,
-    random_isotropic_sphere, random_sphere, rel,
+    direction, random_disk, random_equatorial, random_half_vector, random_isotropic_disk,
+    random_isotropic_equatorial, random_isotropic_half_vector, random_isotropic_sphere,
+    random_sphere, rel,
 };
 
 /// Allowed relative difference between `pdf(wi, wo)` and the sampled PDF, or, where one
@@ -79,4 +80,14 @@ consistency!(
     isotropic_equatorial_pdf_of_sample_matches_sampled_pdf,
     random_isotropic_equatorial,
     false
+);
+consistency!(
+    half_vector_pdf_of_sample_matches_sampled_pdf,
+    random_half_vector,
+    true
+);
+consistency!(
+    isotropic_half_vector_pdf_of_sample_matches_sampled_pdf,
+    random_isotropic_half_vector,
+    true
 );

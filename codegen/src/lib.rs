@@ -184,6 +184,7 @@ pub(crate) fn header_lines(model: &ModelDesc, options: &Options, prefix: &str) -
         diffbsdf::Domain::Disk => "disk (BRDF, upper hemisphere)",
         diffbsdf::Domain::Sphere => "sphere (full BSDF)",
         diffbsdf::Domain::Equatorial => "equatorial sphere (full BSDF, pole on the y axis)",
+        diffbsdf::Domain::HalfVector => "half vector on the disk (BRDF, upper hemisphere)",
     };
     let e = options.entry_points;
     let mut entries = Vec::new();

@@ -116,11 +116,7 @@ pub fn generate_set(materials: &[Material], options: &Options) -> Result<SetCode
             }
             for (gi, g) in groups.iter().enumerate() {
                 let first = &materials[g[0]].model;
-                let domain = match first.def.domain {
-                    diffbsdf::Domain::Disk => "disk",
-                    diffbsdf::Domain::Sphere => "sphere",
-                    diffbsdf::Domain::Equatorial => "equatorial",
-                };
+                let domain = first.def.domain.name().replace('-', "_");
                 let prefix = n.ident(&format!("{root}_{domain}{gi}"));
                 let mut o = options.clone();
                 o.prefix = Some(prefix.clone());

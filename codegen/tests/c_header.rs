@@ -152,7 +152,7 @@ fn generated_c_matches_kernel() {
                     let s = kernel.sample(wi, u, steps);
                     assert_eq!(o[4] == 1.0, s.is_some(), "{what}: sample validity");
                     check_dir(&what, [o[5], o[6], o[7]], s.map(|s| s.0), tol, &mut e);
-                    let mc = s.map_or(0.0, |s| measure_condition(kernel.domain(), s.0));
+                    let mc = s.map_or(0.0, |s| measure_condition(kernel.domain(), wi, s.0));
                     check_pdf(&what, o[8], s.map_or(0.0, |s| s.1), mc, tol, &mut e);
                 }
                 let base = 9 * samples.len();
@@ -161,7 +161,7 @@ fn generated_c_matches_kernel() {
                         "{} buffer={buffer} steps {steps} pdf wi {wi:?} wo {wo:?}",
                         model.name
                     );
-                    let mc = measure_condition(kernel.domain(), wo)
+                    let mc = measure_condition(kernel.domain(), wi, wo)
                         .max(kernel.pdf_condition(wi, wo, steps));
                     check_pdf(
                         &what,

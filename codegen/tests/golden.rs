@@ -1,4 +1,5 @@
-//! Golden files: the output for two small fixed random-weight models (disk and sphere) in
+//! Golden files: the output for three small fixed random-weight models (disk, sphere and
+//! half-vector chart) in
 //! every language and in the main option combinations is committed under
 //! `tests/golden/` and must not change unnoticed. Regenerate with
 //! `DIFFBSDF_BLESS=1 cargo test -p diffbsdf-codegen --test golden` and review the diff.
@@ -28,8 +29,12 @@ fn tiny(domain: Domain, name: &str) -> Vec<u8> {
             hidden_layers: 2,
         },
         default_steps: 2,
-        isotropic: domain == Domain::Disk,
-        incident: diffbsdf::IncidentRange::WholeSphere,
+        isotropic: !domain.is_spherical(),
+        incident: if domain.is_spherical() {
+            diffbsdf::IncidentRange::WholeSphere
+        } else {
+            diffbsdf::IncidentRange::UpperHemisphere
+        },
         name: ModelName::new(name).expect("name"),
     };
     random_blob(&def, 5, 1.0)
@@ -38,6 +43,7 @@ fn tiny(domain: Domain, name: &str) -> Vec<u8> {
 fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
     let disk = tiny(Domain::Disk, "tiny disk");
     let sphere = tiny(Domain::Sphere, "tiny-sphere");
+    let half_vector = tiny(Domain::HalfVector, "tiny half vector");
     let opt = |language, float, weights, entry_points| Options {
         language,
         float,
@@ -86,6 +92,16 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
             "sphere_pdf_buffer.h",
             sphere,
             opt(Language::C, Float::F32, buf, pdf_only),
+        ),
+        (
+            "half_vector_all.h",
+            half_vector.clone(),
+            opt(Language::C, Float::F32, Weights::Baked, EntryPoints::ALL),
+        ),
+        (
+            "half_vector_all_f16.wgsl",
+            half_vector,
+            opt(Language::Wgsl, Float::F16, Weights::Baked, EntryPoints::ALL),
         ),
     ]
 }

@@ -89,7 +89,7 @@ fn compare(
                 // The sampled PDF is the density at the sampled direction: allowed what a PDF
                 // of that direction is (the measure's and the density's condition there).
                 let mc = s.map_or(0.0, |s| {
-                    measure_condition(kernel.domain(), s.0)
+                    measure_condition(kernel.domain(), wi, s.0)
                         .max(kernel.pdf_condition(wi, s.0, steps))
                 });
                 let amp = kernel.amplification(wi, u, steps);
@@ -119,7 +119,7 @@ fn compare(
             &what,
             got,
             want,
-            measure_condition(kernel.domain(), wo).max(kernel.pdf_condition(wi, wo, steps)),
+            measure_condition(kernel.domain(), wi, wo).max(kernel.pdf_condition(wi, wo, steps)),
             tol_pdf,
             &mut e,
         );
@@ -139,7 +139,8 @@ fn finish(label: &str, steps: u32, e: Errors, flips: usize, vectors: usize, tota
 
 /// The entry points executed for an architecture, each its own pipeline in buffer mode
 /// (one pipeline serves every model of the architecture), in both languages: all three
-/// in f32 everywhere and in f16 on the disk; on the sphere architectures the f16
+/// in f32 everywhere and in f16 on the disk and the half-vector chart (the disk's nets); on
+/// the sphere architectures the f16
 /// direction only, since there f16 networks put the sampled PDF up to 16 % from the
 /// kernel's, beyond the f16 bound (docs/codegen.md).
 fn plan(float: Float, domain: Domain) -> Vec<EntryPoints> {
@@ -149,7 +150,7 @@ fn plan(float: Float, domain: Domain) -> Vec<EntryPoints> {
         pdf,
     };
     match (float, domain) {
-        (Float::F32, _) | (Float::F16, Domain::Disk) => vec![
+        (Float::F32, _) | (Float::F16, Domain::Disk | Domain::HalfVector) => vec![
             one(true, false, false),
             one(false, true, false),
             one(false, false, true),

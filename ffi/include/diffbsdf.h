@@ -77,7 +77,7 @@ typedef struct diffbsdf_sample_result {
 
 /** What a loaded model is. */
 typedef struct diffbsdf_info {
-    uint32_t domain;                 /**< 0: disk (BRDF, upper hemisphere), 1: sphere (BSDF), 2: equatorial sphere (pole on y). */
+    uint32_t domain;                 /**< 0: disk (BRDF, upper hemisphere), 1: sphere (BSDF), 2: equatorial sphere (pole on y), 3: half vector on the disk (BRDF, upper hemisphere). */
     uint32_t precision;              /**< 0: f32 weights in the blob, 1: f16. */
     uint32_t default_steps;          /**< Euler steps used for steps = 0. */
     uint32_t velocity_hidden_layers; /**< 3 or 4. */

@@ -29,7 +29,7 @@ pub use status::diffbsdf_status;
 use core::ffi::c_char;
 use core::mem::{align_of, size_of};
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::{Domain, IncidentRange, Precision, Sample};
+use diffbsdf::{IncidentRange, Precision, Sample};
 use parallel::Rows;
 use status::diffbsdf_status as S;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -288,11 +288,7 @@ pub unsafe extern "C" fn diffbsdf_model_info(
             *n = *b as c_char;
         }
         let info = diffbsdf_info {
-            domain: match def.domain {
-                Domain::Disk => 0,
-                Domain::Sphere => 1,
-                Domain::Equatorial => 2,
-            },
+            domain: u32::from(def.domain.code()),
             precision: match def.precision {
                 Precision::F32 => 0,
                 Precision::F16 => 1,

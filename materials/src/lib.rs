@@ -25,6 +25,7 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
+pub mod halfway;
 pub mod lambertian;
 pub mod microfacet;
 pub mod plastic;

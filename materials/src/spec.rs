@@ -15,6 +15,7 @@
 
 use crate::conductor::{Conductor, Metal};
 use crate::dielectric::Dielectric;
+use crate::halfway::Halfway;
 use crate::lambertian::Lambertian;
 use crate::microfacet::{Distribution, Microfacet};
 use crate::plastic::Plastic;
@@ -261,6 +262,14 @@ pub fn parse_spec(spec: &str) -> Result<Box<dyn Material>, SpecError> {
         "rgl" | "measured" => {
             let path = rest.trim();
             Box::new(RglMaterial::open(path).map_err(SpecError::Rgl)?)
+        }
+        "halfway" => {
+            let inner = parse_spec(rest)?;
+            let spec = inner.spec();
+            Box::new(Halfway::new(inner).ok_or(SpecError::BadValue {
+                key: "halfway".into(),
+                value: spec,
+            })?)
         }
         _ => return Err(SpecError::UnknownModel(model)),
     };

@@ -108,7 +108,8 @@ class Model:
     # -- the model definition ------------------------------------------------------------
     @property
     def domain(self) -> str:
-        """``"disk"`` (BRDF, ``wi.z >= 0`` only, samples the upper hemisphere) or ``"sphere"``."""
+        """``"disk"`` or ``"half-vector"`` (BRDFs: ``wi.z >= 0`` only, sample the upper
+        hemisphere), ``"sphere"`` or ``"equatorial"``."""
         return self._raw.domain
 
     @property

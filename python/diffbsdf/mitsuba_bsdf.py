@@ -147,7 +147,8 @@ def _make_class() -> type:
             self.steps: Optional[int] = int(props.get("steps")) if "steps" in keys else None
             if self.steps is not None and self.steps < 1:
                 raise ValueError(f"diffbsdf: steps must be >= 1, got {self.steps}")
-            self.disk = self.model.domain == "disk"
+            # Disk and half-vector models sample the upper hemisphere only.
+            self.disk = self.model.domain in ("disk", "half-vector")
             # Models declared for wi above the surface only (every disk model, a BRDF on the
             # sphere) see wi mirrored into the upper hemisphere, as `twosided` does.
             self.mirror = self.model.incident_range == "upper_hemisphere"

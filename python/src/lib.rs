@@ -15,7 +15,7 @@
 mod material;
 
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::{AnyModel, BatchError, BlobError, Domain, Precision, Sample};
+use diffbsdf::{AnyModel, BatchError, BlobError, Precision, Sample};
 use diffbsdf_ffi::slices;
 use diffbsdf_materials::rgl::RglError;
 use diffbsdf_materials::SpecError;
@@ -258,11 +258,7 @@ impl RawModel {
 
     #[getter]
     fn domain(&self) -> &'static str {
-        match self.model.def().domain {
-            Domain::Disk => "disk",
-            Domain::Sphere => "sphere",
-            Domain::Equatorial => "equatorial",
-        }
+        self.model.def().domain.name()
     }
 
     #[getter]

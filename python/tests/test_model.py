@@ -181,7 +181,7 @@ def test_pdf_of_sample_equals_sampled_pdf(models, name):
     # invalid rows are zeros, valid rows are unit vectors on the sampled side
     assert np.all(wo[~valid] == 0) and np.all(pdf[~valid] == 0)
     np.testing.assert_allclose(np.linalg.norm(wo[valid], axis=1), 1.0, atol=1e-5)
-    if m.domain == "disk":
+    if m.domain in ("disk", "half-vector"):
         assert np.all(wo[valid, 2] >= 0)
 
 

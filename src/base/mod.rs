@@ -44,7 +44,7 @@ impl BaseDist {
     pub fn from_net(domain: Domain, out: [f32; BASE_OUTPUTS]) -> Self {
         let clamp = |s: f32| s.clamp(LN_SCALE_MIN, LN_SCALE_MAX);
         match domain {
-            Domain::Disk => BaseDist::Disk {
+            Domain::Disk | Domain::HalfVector => BaseDist::Disk {
                 mu: [out[0], out[1]],
                 ln_sigma: [clamp(out[2]), clamp(out[3])],
             },

@@ -178,7 +178,7 @@ impl RawHeader {
             velocity: self.velocity,
             default_steps: self.default_steps,
             isotropic: self.flags & FLAG_ISOTROPIC != 0,
-            incident: if self.flags & FLAG_UPPER_HEMISPHERE != 0 || domain == Domain::Disk {
+            incident: if self.flags & FLAG_UPPER_HEMISPHERE != 0 || !domain.is_spherical() {
                 IncidentRange::UpperHemisphere
             } else {
                 IncidentRange::WholeSphere

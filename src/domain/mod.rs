@@ -3,6 +3,7 @@
 
 pub mod disk;
 pub mod equatorial;
+pub mod half_vector;
 pub mod sphere;
 
 use crate::def::Domain;
@@ -15,7 +16,7 @@ impl Domain {
     #[must_use]
     pub fn features(self, x: [f32; 2]) -> [f32; MAX_FEATURES] {
         match self {
-            Domain::Disk => [x[0], x[1], 0.0],
+            Domain::Disk | Domain::HalfVector => [x[0], x[1], 0.0],
             Domain::Sphere | Domain::Equatorial => {
                 [x[0], crate::math::sin(x[1]), crate::math::cos(x[1])]
             }
@@ -30,7 +31,9 @@ impl Domain {
         x: [f32; 2],
     ) -> ([f32; MAX_FEATURES], [[f32; MAX_FEATURES]; 2]) {
         match self {
-            Domain::Disk => ([x[0], x[1], 0.0], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+            Domain::Disk | Domain::HalfVector => {
+                ([x[0], x[1], 0.0], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+            }
             Domain::Sphere | Domain::Equatorial => {
                 let (s, c) = (crate::math::sin(x[1]), crate::math::cos(x[1]));
                 ([x[0], s, c], [[1.0, 0.0, 0.0], [0.0, c, -s]])
@@ -43,7 +46,7 @@ impl Domain {
     #[must_use]
     pub fn advance(self, x: [f32; 2], d: [f32; 2]) -> [f32; 2] {
         match self {
-            Domain::Disk => [x[0] + d[0], x[1] + d[1]],
+            Domain::Disk | Domain::HalfVector => [x[0] + d[0], x[1] + d[1]],
             Domain::Sphere | Domain::Equatorial => [x[0] + d[0], sphere::wrap(x[1] + d[1])],
         }
     }
@@ -53,18 +56,19 @@ impl Domain {
     #[must_use]
     pub fn difference(self, a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
         match self {
-            Domain::Disk => [a[0] - b[0], a[1] - b[1]],
+            Domain::Disk | Domain::HalfVector => [a[0] - b[0], a[1] - b[1]],
             Domain::Sphere | Domain::Equatorial => [a[0] - b[0], sphere::wrap(a[1] - b[1])],
         }
     }
 
-    /// The direction of a flow point, and `ln(pdf_w / pdf_x)` there; `None` outside the
-    /// domain.
+    /// The direction of a flow point for incident `wi` (in the model's frame; only the
+    /// half-vector chart depends on it); `None` outside the domain.
     #[inline]
     #[must_use]
-    pub fn to_direction(self, x: [f32; 2]) -> Option<Vec3> {
+    pub fn to_direction(self, x: [f32; 2], wi: Vec3) -> Option<Vec3> {
         match self {
             Domain::Disk => disk::to_direction(x),
+            Domain::HalfVector => half_vector::to_direction(x, wi),
             Domain::Sphere => sphere::to_direction(x),
             Domain::Equatorial => equatorial::to_direction(x),
         }
@@ -73,19 +77,22 @@ impl Domain {
     /// `ln(pdf_w / pdf_x)` at a flow point already known to be in the domain.
     #[inline]
     #[must_use]
-    pub fn ln_measure(self, x: [f32; 2], wo: Vec3) -> f32 {
+    pub fn ln_measure(self, x: [f32; 2], wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Domain::Disk => disk::ln_measure(wo),
+            Domain::HalfVector => half_vector::ln_measure(wo, wi),
             Domain::Sphere | Domain::Equatorial => sphere::ln_measure(x[0]),
         }
     }
 
-    /// The flow point of a unit direction; `None` where the domain has no density.
+    /// The flow point of a unit direction for incident `wi`; `None` where the domain has
+    /// no density.
     #[inline]
     #[must_use]
-    pub fn point_of(self, wo: Vec3) -> Option<[f32; 2]> {
+    pub fn point_of(self, wo: Vec3, wi: Vec3) -> Option<[f32; 2]> {
         match self {
             Domain::Disk => disk::from_direction(wo),
+            Domain::HalfVector => half_vector::from_direction(wo, wi),
             Domain::Sphere => sphere::from_direction(wo),
             Domain::Equatorial => equatorial::from_direction(wo),
         }

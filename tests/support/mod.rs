@@ -90,7 +90,7 @@ pub fn random_params(def: &ModelDef, rng: &mut Rng, min_scale: f32) -> Vec<f32> 
 fn base_bias(domain: Domain, r: usize, rng: &mut Rng, min_scale: f32) -> f32 {
     let ln_scale = rng.range(min_scale.ln(), 0.4f32.ln());
     match (domain, r) {
-        (Domain::Disk, 0 | 1) => rng.range(-0.4, 0.4),
+        (Domain::Disk | Domain::HalfVector, 0 | 1) => rng.range(-0.4, 0.4),
         (Domain::Sphere | Domain::Equatorial, 0) => rng.range(0.3, 2.8),
         (Domain::Sphere | Domain::Equatorial, 2) => rng.range(-3.0, 3.0),
         _ => ln_scale,
@@ -127,12 +127,14 @@ fn scale_to_invertible(
         let wi = direction(
             0.1 + 0.27 * k as f32,
             0.37 * k as f32,
-            def.domain == Domain::Disk,
+            !def.domain.is_spherical(),
         );
         for i in 0..13 {
             for j in 0..13 {
                 let x = match def.domain {
-                    Domain::Disk => [-2.0 + i as f32 / 3.0, -2.0 + j as f32 / 3.0],
+                    Domain::Disk | Domain::HalfVector => {
+                        [-2.0 + i as f32 / 3.0, -2.0 + j as f32 / 3.0]
+                    }
                     Domain::Sphere | Domain::Equatorial => {
                         [-1.0 + i as f32 * 0.4, -3.1 + j as f32 * 0.52]
                     }
@@ -267,4 +269,23 @@ pub fn random_isotropic_equatorial(seed: u64, min_steps: u32) -> Model4x32 {
         m.params(p).unwrap();
     });
     Model4x32::from_params(def, &p).unwrap()
+}
+
+/// A random disk model as [`random_disk`], on the half-vector chart (the same nets).
+pub fn random_half_vector(seed: u64, min_steps: u32) -> Model3x32 {
+    let m = random_disk(seed, min_steps);
+    let mut def = *m.def();
+    def.domain = Domain::HalfVector;
+    let mut p = vec![0.0; def.param_count()];
+    m.params(&mut p).unwrap();
+    Model3x32::from_params(def, &p).unwrap()
+}
+
+/// [`random_half_vector`], flagged isotropic.
+pub fn random_isotropic_half_vector(seed: u64, min_steps: u32) -> Model3x32 {
+    let m = random_half_vector(seed, min_steps);
+    let (def, p) = flagged_isotropic(m.def(), |p| {
+        m.params(p).unwrap();
+    });
+    Model3x32::from_params(def, &p).unwrap()
 }

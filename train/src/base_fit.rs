@@ -73,7 +73,7 @@ fn clamp_scale(s: f32) -> (f64, f64) {
 pub fn base_nll(domain: Domain, out: &[f32], x1: [f32; 2], d_out: &mut [f32]) -> f64 {
     let x = [x1[0] as f64, x1[1] as f64];
     match domain {
-        Domain::Disk => {
+        Domain::Disk | Domain::HalfVector => {
             let (s0, m0) = clamp_scale(out[2]);
             let (s1, m1) = clamp_scale(out[3]);
             let (l0, dmu0, ds0) = gaussian_nll(x[0], out[0] as f64, s0);

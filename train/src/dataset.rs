@@ -204,12 +204,22 @@ pub fn to_flow_pair(
     };
     let f32s = |w: DVec3| [w.x as f32, w.y as f32, w.z as f32];
     let x1 = match domain {
-        Domain::Disk => domain.point_of(f32s(p.wo).into())?,
+        Domain::Disk => domain.point_of(f32s(p.wo).into(), f32s(p.wi).into())?,
         Domain::Sphere => [p.wo.theta() as f32, p.wo.phi() as f32],
         // The equatorial chart is the sphere's about the y axis (docs/math.md, (54)).
         Domain::Equatorial => {
             let (x, y, z) = (p.wo.x, p.wo.y, p.wo.z);
             [(x.hypot(z)).atan2(y) as f32, z.atan2(x) as f32]
+        }
+        // The half vector of the reflection, in f64 and rounded once (docs/math.md, §4.4).
+        Domain::HalfVector => {
+            let s = p.wi + p.wo;
+            let len = s.length();
+            if !(p.wo.z > 0.0 && p.wi.z > 0.0 && len > 0.0) {
+                return None;
+            }
+            let h = s / len;
+            [h.x as f32, h.y as f32]
         }
     };
     Some((f32s(p.wi), x1))

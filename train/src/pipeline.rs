@@ -157,6 +157,10 @@ pub fn paper_def(domain: Domain) -> ModelDef {
             domain: Domain::Equatorial,
             ..ModelDef::paper_sphere()
         },
+        Domain::HalfVector => ModelDef {
+            domain: Domain::HalfVector,
+            ..ModelDef::paper_disk()
+        },
     }
 }
 

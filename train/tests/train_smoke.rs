@@ -65,6 +65,55 @@ fn tiny_disk_fit_trains_exports_and_loads() {
     }
 }
 
+/// The half-vector chart: a tiny fit loads with its domain, its PDFs agree, and the lobe of
+/// a rough conductor sits near the chart's centre (half vectors about the normal) at
+/// oblique incidence, where the directions themselves sit about the mirror direction.
+#[test]
+fn tiny_half_vector_fit_centres_the_lobe() {
+    let f = tiny_fit("conductor:ggx,alpha=0.3,metal=Cu", Domain::HalfVector, 3);
+    let s = stage(&f, "student");
+    assert!(s.loss_end < s.loss_start);
+    for precision in [Precision::F32, Precision::F16] {
+        let m = Model3x32::from_blob(&f.model.blob(precision).unwrap()).unwrap();
+        assert_eq!(m.def().domain, Domain::HalfVector);
+        assert_eq!(m.def().incident, IncidentRange::UpperHemisphere);
+        let wis = [
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(0.6, 0.0, 0.8),
+            Vec3::new(0.0, -0.96, 0.28),
+        ];
+        check_pdf_consistency(
+            |wi, u| m.sample(wi, u).map(|s| (s.wo, s.pdf)),
+            |wi, wo| m.pdf(wi, wo),
+            &wis,
+        );
+        let wi = Vec3::new(0.866, 0.0, 0.5);
+        let (mut h_mean, mut wo_mean, mut n) = (Vec3::ZERO, Vec3::ZERO, 0.0);
+        for k in 0..1024 {
+            let u = Vec2::new(
+                (k as f32 + 0.5) / 1024.0,
+                ((k * 619 % 1024) as f32 + 0.5) / 1024.0,
+            );
+            if let Some(s) = m.sample(wi, u) {
+                h_mean += (wi + s.wo).normalize();
+                wo_mean += s.wo;
+                n += 1.0;
+            }
+        }
+        let (h_mean, wo_mean) = (h_mean / n, wo_mean / n);
+        assert!(n > 700.0, "{n} valid of 1024");
+        // About the normal, leaning towards wi as the visible normals do (D(h) (wi.h)).
+        assert!(
+            (0.0..0.35).contains(&h_mean.x) && h_mean.y.abs() < 0.1,
+            "{h_mean:?}"
+        );
+        assert!(
+            wo_mean.x < -0.4,
+            "directions around the mirror direction: {wo_mean:?}"
+        );
+    }
+}
+
 #[test]
 fn tiny_sphere_fit_of_a_dielectric_loads() {
     let f = tiny_fit("dielectric:beckmann,alpha=0.3,eta=1.5", Domain::Sphere, 5);

@@ -127,11 +127,7 @@ pub fn check(
 }
 
 fn domain_name(model: &AnyModel) -> &'static str {
-    match model.def().domain {
-        diffbsdf::Domain::Disk => "disk",
-        diffbsdf::Domain::Sphere => "sphere",
-        diffbsdf::Domain::Equatorial => "equatorial",
-    }
+    model.def().domain.name()
 }
 
 /// The fewest of `from`, `2 from`, `4 from`, ... (up to the ladder's top) at which every

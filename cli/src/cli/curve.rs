@@ -119,14 +119,13 @@ pub struct CurveRecord {
     pub points: Vec<CurvePoint>,
 }
 
-fn domain(arg: DomainArg) -> Result<Domain, CommandError> {
+fn domain(arg: DomainArg, material: &dyn Material) -> Result<Domain, CommandError> {
     match arg {
-        DomainArg::Disk => Ok(Domain::Disk),
-        DomainArg::Sphere => Ok(Domain::Sphere),
-        DomainArg::Equatorial => Ok(Domain::Equatorial),
         DomainArg::Auto => Err(CommandError::Usage(
-            "curve needs one domain (disk, sphere or equatorial), not auto".into(),
+            "curve needs one domain (disk, sphere, equatorial, half-vector or material), not auto"
+                .into(),
         )),
+        _ => Ok(arg.candidates(material)[0]),
     }
 }
 
@@ -349,7 +348,7 @@ fn stem(args: &CurveArgs) -> String {
 /// Runs `diffbsdf curve`.
 pub fn run(args: CurveArgs, out: &mut dyn std::io::Write) -> Result<(), CommandError> {
     let material = parse_spec(&args.spec).map_err(CommandError::Spec)?;
-    let domain = domain(args.domain)?;
+    let domain = domain(args.domain, material.as_ref())?;
     for &layers in &args.student_layers {
         let mut def = config(&args, domain, 1, layers).def;
         def.default_steps = def.default_steps.max(1);

@@ -23,6 +23,12 @@ pub enum DomainArg {
     Sphere,
     /// Spherical coordinates about the tangent y axis (the normal on the equator).
     Equatorial,
+    /// The half vector of the reflection on the projected disk (BRDFs; the specular peak
+    /// at the disk's centre for every wi).
+    HalfVector,
+    /// The half-vector chart for a reflection-only material, the sphere for a
+    /// transmissive one.
+    Material,
     /// The disk where it suffices; the sphere for transmissive materials, or when the
     /// disk model misses `--max-grazing-firefly` or `--target-rv`.
     Auto,
@@ -35,6 +41,9 @@ impl DomainArg {
             DomainArg::Disk => vec![Domain::Disk],
             DomainArg::Sphere => vec![Domain::Sphere],
             DomainArg::Equatorial => vec![Domain::Equatorial],
+            DomainArg::HalfVector => vec![Domain::HalfVector],
+            DomainArg::Material if material.is_transmissive() => vec![Domain::Sphere],
+            DomainArg::Material => vec![Domain::HalfVector],
             DomainArg::Auto if material.is_transmissive() => vec![Domain::Sphere],
             DomainArg::Auto => vec![Domain::Disk, Domain::Sphere],
         }
@@ -48,7 +57,9 @@ pub struct FitArgs {
     pub spec: String,
     /// Flow domain. The sphere by default: it has no boundary at the horizon, where the
     /// disk loses measured materials (`docs/measured-materials.md`); the disk model is the
-    /// faster choice for rough analytic BRDFs.
+    /// faster choice for rough analytic BRDFs. `half-vector` (or `material`: half-vector
+    /// for a BRDF, sphere for a BSDF) samples measured BRDFs better but does not yet pass
+    /// the exactness sweep at grazing incidence on them (`docs/measured-materials.md`).
     #[arg(long, value_enum, default_value = "sphere")]
     pub domain: DomainArg,
     /// Mean RV to reach: the blob's default steps become the fewest of 1, 2, 4, ..., 32

@@ -84,12 +84,11 @@ impl Emitter<'_> {
         self.code.line(
             "// The direction of flow point (a, b) with pdf = 1, or none() outside the domain.",
         );
-        self.fn_open(
-            rt.clone(),
-            "to_direction",
-            false,
-            &[(T::F, "a"), (T::F, "b")],
-        );
+        let mut params = vec![(T::F, "a"), (T::F, "b")];
+        if self.half_vector() {
+            params.extend([(T::F, "wx"), (T::F, "wy"), (T::F, "wz")]);
+        }
+        self.fn_open(rt.clone(), "to_direction", false, &params);
         let r = self.d.decl(&rt, "r", None);
         self.code.line(r);
         let zero = self.f(0.0);
@@ -126,20 +125,81 @@ impl Emitter<'_> {
             self.code.open(format!("if (!(z > {zero})) {{"));
             self.code.line(&ret_none);
             self.code.close("}");
-            self.code.line("r.x = a;");
-            self.code.line("r.y = b;");
-            self.code.line("r.z = z;");
+            if self.half_vector() {
+                // wo = 2 (wi.h) h - wi for the half vector h = (a, b, z).
+                self.decl(T::F, "d", "wx * a + wy * b + wz * z");
+                self.decl(T::F, "d2", &format!("{} * d", self.f(2.0)));
+                self.code.line("r.x = a * d2 - wx;");
+                self.code.line("r.y = b * d2 - wy;");
+                self.code.line("r.z = z * d2 - wz;");
+                self.code
+                    .open(format!("if (!(d > {zero} && r.z > {zero})) {{"));
+                self.code.line(&ret_none);
+                self.code.close("}");
+            } else {
+                self.code.line("r.x = a;");
+                self.code.line("r.y = b;");
+                self.code.line("r.z = z;");
+            }
         }
         self.code.line(format!("r.pdf = {one};"));
         self.code.line("return r;");
         self.end_fn();
     }
 
-    pub(super) fn ln_measure(&self, wo_z: &str, theta: &str) -> String {
+    /// `ln(pdf_w / pdf_x)` at flow point `a` with direction `wo` (in the incident frame):
+    /// `-ln sin a` on the sphere, `ln wo.z` on the disk, `ln(s.z / (2 s.s))` with `s = wi +
+    /// wo` on the half-vector chart (`src/domain/half_vector.rs`), whose `sx, sy, sz`
+    /// [`Emitter::half_vector_sum`] has declared.
+    pub(super) fn ln_measure(&self, wo_z: &str, a: &str) -> String {
         if self.sphere() {
-            format!("-{}", self.math(Math::Log, &self.math(Math::Sin, theta)))
+            format!("-{}", self.math(Math::Log, &self.math(Math::Sin, a)))
+        } else if self.half_vector() {
+            self.math(
+                Math::Log,
+                &format!("sz / ({} * (sx * sx + sy * sy + sz * sz))", self.f(2.0)),
+            )
         } else {
             self.math(Math::Log, wo_z)
         }
+    }
+
+    /// The half-vector chart: `sx, sy, sz = wi + wo` for `wo` in the incident frame
+    /// (`lwx, lwy, lwz` is `wi` there).
+    pub(super) fn half_vector_sum(&mut self, ox: &str, oy: &str, oz: &str) {
+        self.decl(T::F, "sx", &format!("lwx + {ox}"));
+        self.decl(T::F, "sy", &format!("lwy + {oy}"));
+        self.decl(T::F, "sz", &format!("lwz + {oz}"));
+    }
+
+    /// Arguments of `to_direction`: the flow point, and `wi` in the incident frame on the
+    /// half-vector chart.
+    pub(super) fn point_args<'s>(&self, a: &'s str, b: &'s str) -> Vec<&'s str> {
+        if self.half_vector() {
+            vec![a, b, "lwx", "lwy", "lwz"]
+        } else {
+            vec![a, b]
+        }
+    }
+
+    /// The half-vector chart's flow point of `wo` (in the incident frame), as locals `ya`,
+    /// `yb`: `h = (wi + wo) / |wi + wo|` (`src/domain/half_vector.rs`, `from_direction`).
+    pub(super) fn half_vector_point(&mut self, ox: &str, oy: &str, fail: &str) {
+        let zero = self.f(0.0);
+        self.code.open(format!("if (!(wo.z > {zero})) {{"));
+        self.code.line(fail);
+        self.code.close("}");
+        self.half_vector_sum(ox, oy, "wo.z");
+        let len = self.math(Math::Sqrt, "sx * sx + sy * sy + sz * sz");
+        self.decl(T::F, "slen", &len);
+        self.code.open(format!("if (!(slen > {zero})) {{"));
+        self.code.line(fail);
+        self.code.close("}");
+        self.decl(T::F, "sinv", &format!("{} / slen", self.f(1.0)));
+        self.code.open(format!("if (!(sz * sinv > {zero})) {{"));
+        self.code.line(fail);
+        self.code.close("}");
+        self.decl(T::F, "ya", "sx * sinv");
+        self.decl(T::F, "yb", "sy * sinv");
     }
 }

@@ -58,7 +58,7 @@ impl Emitter<'_> {
             self.code.line(l);
         }
         self.code.close("}");
-        let td = self.call("to_direction", false, &["a", "b"]);
+        let td = self.call("to_direction", false, &self.point_args("a", "b"));
         if self.m.def.isotropic {
             self.decl(rt, "r", &td);
             self.turn_back("r");
@@ -110,12 +110,15 @@ impl Emitter<'_> {
             self.code.line(l);
         }
         self.code.close("}");
-        let td = self.call("to_direction", false, &["a", "b"]);
+        let td = self.call("to_direction", false, &self.point_args("a", "b"));
         self.decl(rt, "r", &td);
         self.code.open(format!("if (!(r.pdf > {zero})) {{"));
         self.code.line(&none);
         self.code.close("}");
         let lp = self.call("base_ln_pdf", false, &["cond", "x0.x", "x0.y"]);
+        if self.half_vector() {
+            self.half_vector_sum("r.x", "r.y", "r.z");
+        }
         let lm = self.ln_measure("r.z", "a");
         self.decl(T::F, "ln_pdf", &format!("{lp} - ln_det + {lm}"));
         self.code

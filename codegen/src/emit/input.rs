@@ -88,5 +88,21 @@ impl Emitter<'_> {
         };
         let cond = self.call("condition", true, &[&enc]);
         self.decl(self.st("Cond"), "cond", &cond);
+        if self.half_vector() {
+            // wi in the incident frame: the half-vector chart reflects it.
+            self.local_incident();
+        }
+    }
+
+    /// `lwx, lwy, lwz`: `wi` in the incident frame (the world's for an anisotropic model).
+    fn local_incident(&mut self) {
+        if self.m.def.isotropic {
+            self.decl(T::F, "lwx", "fr.c * wi.x + fr.s * wi.y");
+            self.decl(T::F, "lwy", "fr.c * wi.y - fr.s * wi.x");
+        } else {
+            self.decl(T::F, "lwx", "wi.x");
+            self.decl(T::F, "lwy", "wi.y");
+        }
+        self.decl(T::F, "lwz", "wi.z");
     }
 }

@@ -333,6 +333,8 @@ impl Emitter<'_> {
             self.code.close("}");
             self.decl(T::F, "ya", &self.d.atan2("rho", third));
             self.decl(T::F, "yb", &self.d.atan2(second, ox));
+        } else if self.half_vector() {
+            self.half_vector_point(ox, oy, &fail);
         } else {
             self.code.open(format!("if (!(wo.z > {zero})) {{"));
             self.code.line(&fail);

@@ -120,6 +120,11 @@ impl<'a> Emitter<'a> {
     fn equatorial(&self) -> bool {
         self.m.def.domain == Domain::Equatorial
     }
+    /// The half-vector chart: the flow point is the half vector on the disk, and the
+    /// direction its reflection of `wi` (in the incident frame: `lwx, lwy, lwz`).
+    fn half_vector(&self) -> bool {
+        self.m.def.domain == Domain::HalfVector
+    }
     fn needs_velocity(&self) -> bool {
         self.e.direction || self.e.pdf
     }

@@ -94,7 +94,7 @@ pub fn random_params(def: &ModelDef, seed: u64, stretch: f32) -> Vec<f32> {
 fn base_bias(domain: Domain, r: usize, rng: &mut Rng) -> f32 {
     let ln_scale = rng.range(0.08f32.ln(), 0.4f32.ln());
     match (domain, r) {
-        (Domain::Disk, 0 | 1) => rng.range(-0.4, 0.4),
+        (Domain::Disk | Domain::HalfVector, 0 | 1) => rng.range(-0.4, 0.4),
         (Domain::Sphere | Domain::Equatorial, 0) => rng.range(0.3, 2.8),
         (Domain::Sphere | Domain::Equatorial, 2) => rng.range(-3.0, 3.0),
         _ => ln_scale,
@@ -134,6 +134,10 @@ pub fn test_models() -> Vec<TestModel> {
         d.incident = diffbsdf::IncidentRange::UpperHemisphere;
         d
     };
+    let half_vector = ModelDef {
+        domain: Domain::HalfVector,
+        ..disk
+    };
     let mut models = vec![
         TestModel {
             name: "random_disk".into(),
@@ -172,6 +176,30 @@ pub fn test_models() -> Vec<TestModel> {
                     Precision::F32,
                 ),
                 16,
+                1.2,
+            ),
+        },
+        TestModel {
+            name: "random_half_vector_iso".into(),
+            blob: random_blob(
+                &named(iso(half_vector), "random_half_vector_iso", Precision::F32),
+                17,
+                1.2,
+            ),
+        },
+        TestModel {
+            name: "random_half_vector_aniso".into(),
+            blob: random_blob(
+                &named(half_vector, "random_half_vector_aniso", Precision::F32),
+                18,
+                1.2,
+            ),
+        },
+        TestModel {
+            name: "random_half_vector_f16".into(),
+            blob: random_blob(
+                &named(iso(half_vector), "random_half_vector_f16", Precision::F16),
+                19,
                 1.2,
             ),
         },
@@ -485,9 +513,11 @@ pub fn check_pdf(what: &str, got: f32, want: f32, measure: f32, tol: f32, e: &mu
     );
 }
 
-/// `|d ln(pdf_w / pdf_x) / d theta|` at `wo`: `|cot theta|` on the sphere, `tan theta` on
-/// the disk (0 when `wo` is not a direction).
-pub fn measure_condition(domain: Domain, wo: [f32; 3]) -> f32 {
+/// `|d ln(pdf_w / pdf_x) / d theta|` at `wo` for incident `wi`: `|cot theta|` on the
+/// sphere, `tan theta` on the disk, `tan theta_h + tan theta_d` on the half-vector chart
+/// (`h` the half vector, `theta_d` the angle between `wi` and `h`; the measure is
+/// `h.z / (4 wi.h)`), 0 when `wo` is not a direction.
+pub fn measure_condition(domain: Domain, wi: [f32; 3], wo: [f32; 3]) -> f32 {
     let rho = (wo[0] * wo[0] + wo[1] * wo[1]).sqrt();
     let z = wo[2].abs();
     let c = match domain {
@@ -495,6 +525,13 @@ pub fn measure_condition(domain: Domain, wo: [f32; 3]) -> f32 {
         Domain::Disk => rho / z,
         // The chart's theta is measured from the y axis.
         Domain::Equatorial => wo[1].abs() / (wo[0] * wo[0] + wo[2] * wo[2]).sqrt(),
+        Domain::HalfVector => {
+            let s = [wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]];
+            let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+            let h = [s[0] / len, s[1] / len, s[2] / len];
+            let cd = wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2];
+            (h[0] * h[0] + h[1] * h[1]).sqrt() / h[2].abs() + (1.0 - cd * cd).max(0.0).sqrt() / cd
+        }
     };
     if c.is_finite() {
         c

@@ -73,7 +73,7 @@ fn decode(x: &[f64; DIM], domain: Domain) -> Option<(DVec3, DVec3)> {
             }
             equal_area_square_to_sphere([x[2], x[3]])
         }
-        Domain::Disk => {
+        Domain::Disk | Domain::HalfVector => {
             let r2 = x[2] * x[2] + x[3] * x[3];
             if r2 >= 1.0 {
                 return None;
@@ -94,7 +94,7 @@ fn density(m: &dyn Material, band: &Band, domain: Domain, x: &[f64; DIM]) -> f64
     }
     match domain {
         Domain::Sphere | Domain::Equatorial => domain.target(m, wi, wo),
-        Domain::Disk => {
+        Domain::Disk | Domain::HalfVector => {
             let v = m.eval_luminance(wi, wo);
             if v.is_finite() && v > 0.0 {
                 v
@@ -111,7 +111,7 @@ fn uniform_state(band: &Band, domain: Domain, rng: &mut Pcg64) -> [f64; DIM] {
     let a = equal_area_sphere_to_square(wi);
     let b = match domain {
         Domain::Sphere | Domain::Equatorial => [rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)],
-        Domain::Disk => loop {
+        Domain::Disk | Domain::HalfVector => loop {
             let p = [rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0)];
             if p[0] * p[0] + p[1] * p[1] < 1.0 {
                 break p;

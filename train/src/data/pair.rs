@@ -18,7 +18,7 @@ pub trait DomainTarget {
 impl DomainTarget for Domain {
     fn contains(self, wo: DVec3) -> bool {
         match self {
-            Domain::Disk => wo.z > 0.0,
+            Domain::Disk | Domain::HalfVector => wo.z > 0.0,
             Domain::Sphere | Domain::Equatorial => wo.z != 0.0,
         }
     }

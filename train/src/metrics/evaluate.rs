@@ -9,7 +9,6 @@ use super::kl::{kl_divergence, KlGrid};
 use super::sampler::{draw, weight, SamplerKind};
 use super::stats::WeightStats;
 use diffbsdf::AnyModel;
-use diffbsdf::Domain;
 use diffbsdf_materials::{from_spherical, DVec3, Material};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
@@ -237,11 +236,7 @@ pub fn evaluate(model: &AnyModel, material: &dyn Material, cfg: &EvalConfig) -> 
     });
     Report {
         material: material.spec(),
-        domain: match domain {
-            Domain::Disk => "disk",
-            Domain::Sphere => "sphere",
-            Domain::Equatorial => "equatorial",
-        },
+        domain: domain.name(),
         steps: def.default_steps,
         blob_bytes_f32: diffbsdf::internals::blob::HEADER_LEN
             + 4 * params
