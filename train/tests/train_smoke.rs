@@ -37,6 +37,20 @@ fn check_pdf_consistency(
     assert!(checked > 100, "too few valid samples: {checked}");
 }
 
+/// [`check_pdf_consistency`] of a reflection model at normal, oblique and grazing `wi`.
+fn check_upper_hemisphere_consistency(m: &Model3x32) {
+    let wis = [
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.6, 0.0, 0.8),
+        Vec3::new(0.0, -0.96, 0.28),
+    ];
+    check_pdf_consistency(
+        |wi, u| m.sample(wi, u).map(|s| (s.wo, s.pdf)),
+        |wi, wo| m.pdf(wi, wo),
+        &wis,
+    );
+}
+
 #[test]
 fn tiny_disk_fit_trains_exports_and_loads() {
     let f = tiny_fit("conductor:ggx,alpha=0.3,metal=Cu", Domain::Disk, 3);
@@ -52,16 +66,7 @@ fn tiny_disk_fit_trains_exports_and_loads() {
     for precision in [Precision::F32, Precision::F16] {
         let blob = f.model.blob(precision).unwrap();
         let m = Model3x32::from_blob(&blob).unwrap();
-        let wis = [
-            Vec3::new(0.0, 0.0, 1.0),
-            Vec3::new(0.6, 0.0, 0.8),
-            Vec3::new(0.0, -0.96, 0.28),
-        ];
-        check_pdf_consistency(
-            |wi, u| m.sample(wi, u).map(|s| (s.wo, s.pdf)),
-            |wi, wo| m.pdf(wi, wo),
-            &wis,
-        );
+        check_upper_hemisphere_consistency(&m);
     }
 }
 
@@ -77,16 +82,7 @@ fn tiny_half_vector_fit_centres_the_lobe() {
         let m = Model3x32::from_blob(&f.model.blob(precision).unwrap()).unwrap();
         assert_eq!(m.def().domain, Domain::HalfVector);
         assert_eq!(m.def().incident, IncidentRange::UpperHemisphere);
-        let wis = [
-            Vec3::new(0.0, 0.0, 1.0),
-            Vec3::new(0.6, 0.0, 0.8),
-            Vec3::new(0.0, -0.96, 0.28),
-        ];
-        check_pdf_consistency(
-            |wi, u| m.sample(wi, u).map(|s| (s.wo, s.pdf)),
-            |wi, wo| m.pdf(wi, wo),
-            &wis,
-        );
+        check_upper_hemisphere_consistency(&m);
         let wi = Vec3::new(0.866, 0.0, 0.5);
         let (mut h_mean, mut wo_mean, mut n) = (Vec3::ZERO, Vec3::ZERO, 0.0);
         for k in 0..1024 {
