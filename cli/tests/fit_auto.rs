@@ -154,27 +154,19 @@ fn export_steps_is_the_first_step_count_checked() {
     ladder_ends_at_the_shipped_steps(&checks(&v), 3, &out);
 }
 
-/// `--domain material`: the half-vector chart (the disk's nets, N = 4) for a
+/// The default domain (`material`): the half-vector chart (the disk's nets, N = 4) for a
 /// reflection-only material, the sphere for a transmissive one; each ships an exact step
 /// count.
 #[test]
-fn material_domain_is_the_half_vector_chart_for_brdfs_and_the_sphere_for_bsdfs() {
+fn the_default_domain_is_the_half_vector_chart_for_brdfs_and_the_sphere_for_bsdfs() {
     let brdf = scratch("material-brdf.dbsdf");
-    let v = fit(
-        "conductor:ggx,alpha=0.3,metal=Cu",
-        &["--domain", "material"],
-        &brdf,
-    );
+    let v = fit("conductor:ggx,alpha=0.3,metal=Cu", &[], &brdf);
     let c = checks(&v);
     assert!(c.iter().all(|x| x.0 == "half-vector"), "{c:?}");
     ladder_ends_at_the_shipped_steps(&c, 4, &brdf);
     assert_eq!(blob_steps_and_domain(&brdf).1, diffbsdf::Domain::HalfVector);
     let bsdf = scratch("material-bsdf.dbsdf");
-    let v = fit(
-        "dielectric:beckmann,alpha=0.3,eta=1.5",
-        &["--domain", "material"],
-        &bsdf,
-    );
+    let v = fit("dielectric:beckmann,alpha=0.3,eta=1.5", &[], &bsdf);
     let c = checks(&v);
     assert!(c.iter().all(|x| x.0 == "sphere"), "{c:?}");
     assert_eq!(blob_steps_and_domain(&bsdf).1, diffbsdf::Domain::Sphere);

@@ -168,7 +168,10 @@ def test_outputs_types_and_empty_batch(copper):
 # -- agreement with the kernel ---------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", [COPPER, "rgl-vch-golden-yellow-disk.dbsdf", "conductor-ggx-a0.3-cu-sphere.dbsdf"])
+@pytest.mark.parametrize(
+    "name",
+    [COPPER, "rgl-vch-golden-yellow-disk.dbsdf", "conductor-ggx-a0.3-cu-sphere.dbsdf", "rgl-vch-golden-yellow-hv.dbsdf"],
+)
 def test_pdf_of_sample_equals_sampled_pdf(models, name):
     m = diffbsdf.Model.load(models / name)
     n = 20000

@@ -38,13 +38,30 @@ pub fn from_direction(wo: Vec3, wi: Vec3) -> Option<[f32; 2]> {
     if !(wo.z > 0.0) {
         return None;
     }
-    let s = wi + wo;
+    let s = sum(wi, wo);
     let len = sqrt(s.dot(s));
     if !(len > 0.0) {
         return None;
     }
     let h = s * (1.0 / len);
     (h.z > 0.0).then_some([h.x, h.y])
+}
+
+/// `s = wi + wo` (`docs/math.md`, (56)), with `s.x` taken from the unit-vector identity
+/// `wi.x + wo.x = ((wo.y^2 - wi.y^2) + (wo.z^2 - wi.z^2)) / (wi.x - wo.x)` where `wi.x`
+/// and `wo.x` have opposite signs. Near the mirror direction at grazing incidence `wi.x`
+/// and `wo.x` are about -+1 and `|s|` about 0.035: the plain sum keeps the rounding of
+/// `wo.x`, which is mostly off the sphere (radial), and `h = s / |s|` amplifies it 30x in
+/// the plane of incidence. The identity holds for the `wo` the forward map computes (whose
+/// length is `wi`'s), so the radial rounding drops out. In the incident frame of an
+/// isotropic model `wi.y = 0`, so `x` is the only component where the sum cancels.
+#[inline(always)]
+fn sum(wi: Vec3, wo: Vec3) -> Vec3 {
+    let mut s = wi + wo;
+    if wi.x * wo.x < 0.0 {
+        s.x = ((wo.y * wo.y - wi.y * wi.y) + (wo.z * wo.z - wi.z * wi.z)) / (wi.x - wo.x);
+    }
+    s
 }
 
 /// `ln(pdf_w / pdf_x) = ln(h.z / (4 wi.h)) = ln(s.z / (2 s.s))` with `s = wi + wo`
@@ -57,7 +74,7 @@ pub fn from_direction(wo: Vec3, wi: Vec3) -> Option<[f32; 2]> {
 #[inline]
 #[must_use]
 pub fn ln_measure(wo: Vec3, wi: Vec3) -> f32 {
-    let s = wi + wo;
+    let s = sum(wi, wo);
     ln(s.z / (2.0 * s.dot(s)))
 }
 

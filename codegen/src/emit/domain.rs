@@ -166,10 +166,18 @@ impl Emitter<'_> {
 
     /// The half-vector chart: `sx, sy, sz = wi + wo` for `wo` in the incident frame
     /// (`lwx, lwy, lwz` is `wi` there).
+    /// Where `wi.x` and `wo.x` have opposite signs, `sx` comes from the unit-vector identity
+    /// the kernel's `half_vector::sum` uses, free of the sum's cancellation.
     pub(super) fn half_vector_sum(&mut self, ox: &str, oy: &str, oz: &str) {
         self.decl(T::F, "sx", &format!("lwx + {ox}"));
         self.decl(T::F, "sy", &format!("lwy + {oy}"));
         self.decl(T::F, "sz", &format!("lwz + {oz}"));
+        self.code
+            .open(format!("if (lwx * {ox} < {}) {{", self.f(0.0)));
+        self.code.line(format!(
+            "sx = (({oy} * {oy} - lwy * lwy) + ({oz} * {oz} - lwz * lwz)) / (lwx - {ox});"
+        ));
+        self.code.close("}");
     }
 
     /// Arguments of `to_direction`: the flow point, and `wi` in the incident frame on the

@@ -485,6 +485,9 @@ static inline diffbsdf_tiny_half_vector_Result diffbsdf_tiny_half_vector_sample_
     float sx = lwx + r.x;
     float sy = lwy + r.y;
     float sz = lwz + r.z;
+    if (lwx * r.x < 0.0f) {
+        sx = ((r.y * r.y - lwy * lwy) + (r.z * r.z - lwz * lwz)) / (lwx - r.x);
+    }
     float ln_pdf = diffbsdf_tiny_half_vector_base_ln_pdf(cond, x0.x, x0.y) - ln_det + logf(sz / (2.0f * (sx * sx + sy * sy + sz * sz)));
     r.pdf = expf(ln_pdf);
     float rx = fr.c * r.x - fr.s * r.y;
@@ -678,6 +681,9 @@ static inline float diffbsdf_tiny_half_vector_pdf_impl(float wx, float wy, float
     float sx = lwx + lox;
     float sy = lwy + loy;
     float sz = lwz + wo.z;
+    if (lwx * lox < 0.0f) {
+        sx = ((loy * loy - lwy * lwy) + (wo.z * wo.z - lwz * lwz)) / (lwx - lox);
+    }
     float slen = sqrtf(sx * sx + sy * sy + sz * sz);
     if (!(slen > 0.0f)) {
         return 0.0f;
