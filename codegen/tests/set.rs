@@ -97,11 +97,12 @@ fn a_mixed_set_compiles_with_one_buffer_per_architecture() {
         let set = generate_set(&mats, &o).expect("generate");
         // The shipped models: isotropic disk, isotropic sphere for every wi (dielectrics,
         // principled), isotropic sphere above the surface only (copper), anisotropic
-        // sphere above the surface only and isotropic half-vector chart (measured).
-        assert_eq!(set.buffers.len(), 5, "one group per architecture");
+        // sphere above the surface only, isotropic half-vector chart (measured, rough
+        // copper) and anisotropic half-vector chart (the anisotropic copper).
+        assert_eq!(set.buffers.len(), 6, "one group per architecture");
         assert_eq!(
             set.buffers.iter().map(|b| b.binding).collect::<Vec<_>>(),
-            vec![4, 5, 6, 7, 8]
+            vec![4, 5, 6, 7, 8, 9]
         );
         assert_eq!(
             set.code.contains("velocity_jacobian"),

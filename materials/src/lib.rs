@@ -37,6 +37,7 @@ pub mod special;
 pub mod spherical;
 pub mod target;
 pub mod warp;
+pub mod zoom;
 
 pub use diffbsdf::glam::DVec3;
 pub use rgb::{luminance, Rgb};

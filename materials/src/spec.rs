@@ -271,6 +271,21 @@ pub fn parse_spec(spec: &str) -> Result<Box<dyn Material>, SpecError> {
                 value: spec,
             })?)
         }
+        "zoom" => {
+            let (k, inner) = rest.split_once(':').ok_or(SpecError::BadValue {
+                key: "zoom".into(),
+                value: rest.into(),
+            })?;
+            let k: f64 = k.parse().map_err(|_| SpecError::BadValue {
+                key: "zoom".into(),
+                value: k.into(),
+            })?;
+            let inner = parse_spec(inner)?;
+            Box::new(crate::zoom::Zoom::new(inner, k).ok_or(SpecError::BadValue {
+                key: "zoom".into(),
+                value: rest.into(),
+            })?)
+        }
         _ => return Err(SpecError::UnknownModel(model)),
     };
     Ok(m)

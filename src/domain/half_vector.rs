@@ -10,6 +10,7 @@
 //! renormalised. `wi` is the incident direction in the model's frame, `wi.z >= 0`.
 
 use crate::math::{ln, sqrt};
+use crate::spec::HALF_VECTOR_IDENTITY_SPAN;
 use glam::Vec3;
 
 /// The half vector of a disk point; `None` outside the open unit disk.
@@ -47,19 +48,31 @@ pub fn from_direction(wo: Vec3, wi: Vec3) -> Option<[f32; 2]> {
     (h.z > 0.0).then_some([h.x, h.y])
 }
 
-/// `s = wi + wo` (`docs/math.md`, (56)), with `s.x` taken from the unit-vector identity
-/// `wi.x + wo.x = ((wo.y^2 - wi.y^2) + (wo.z^2 - wi.z^2)) / (wi.x - wo.x)` where `wi.x`
-/// and `wo.x` have opposite signs. Near the mirror direction at grazing incidence `wi.x`
-/// and `wo.x` are about -+1 and `|s|` about 0.035: the plain sum keeps the rounding of
-/// `wo.x`, which is mostly off the sphere (radial), and `h = s / |s|` amplifies it 30x in
-/// the plane of incidence. The identity holds for the `wo` the forward map computes (whose
-/// length is `wi`'s), so the radial rounding drops out. In the incident frame of an
-/// isotropic model `wi.y = 0`, so `x` is the only component where the sum cancels.
+/// `s = wi + wo` (`docs/math.md`, (58)), its tangent part computed along `wi`'s azimuth:
+/// with `rho = |wi.xy|`, `t` and `p` the components of `wo.xy` along and across `wi.xy / rho`,
+/// `s_t = rho + t`, or where `t < 0` and `rho - t > HALF_VECTOR_IDENTITY_SPAN` the unit-vector
+/// identity `s_t = (p^2 + (wo.z^2 - wi.z^2)) / (rho - t)`; then `s.xy` from `(s_t, p)`.
+/// Near the mirror direction at grazing incidence `rho` and `-t` are about 1 and `|s|`
+/// about 0.035: the plain sum keeps the rounding of `wo` along `wi`'s azimuth, which is
+/// mostly off the sphere (radial), and `h = s / |s|` amplifies it 30x. The identity holds
+/// for the `wo` the forward map computes (whose length is `wi`'s), so the radial rounding
+/// drops out; its own error is the rounding of the squares over `rho - t`, which is why
+/// small tangent parts keep the plain sum. In the incident frame of an isotropic model
+/// `wi.y = 0` and `wi.x = rho`, so `t = wo.x`, `p = wo.y` and nothing is rotated.
 #[inline(always)]
 fn sum(wi: Vec3, wo: Vec3) -> Vec3 {
     let mut s = wi + wo;
-    if wi.x * wo.x < 0.0 {
-        s.x = ((wo.y * wo.y - wi.y * wi.y) + (wo.z * wo.z - wi.z * wi.z)) / (wi.x - wo.x);
+    let rho = sqrt(wi.x * wi.x + wi.y * wi.y);
+    if rho > 0.0 {
+        let (c, sn) = (wi.x / rho, wi.y / rho);
+        let t = c * wo.x + sn * wo.y;
+        let p = c * wo.y - sn * wo.x;
+        let mut st = rho + t;
+        if t < 0.0 && rho - t > HALF_VECTOR_IDENTITY_SPAN {
+            st = (p * p + (wo.z * wo.z - wi.z * wi.z)) / (rho - t);
+        }
+        s.x = c * st - sn * p;
+        s.y = sn * st + c * p;
     }
     s
 }

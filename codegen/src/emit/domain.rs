@@ -4,6 +4,7 @@
 
 use super::Emitter;
 use crate::dialect::{Math, T};
+use diffbsdf::spec::HALF_VECTOR_IDENTITY_SPAN;
 
 impl Emitter<'_> {
     pub(super) fn wrap(&mut self) {
@@ -166,17 +167,30 @@ impl Emitter<'_> {
 
     /// The half-vector chart: `sx, sy, sz = wi + wo` for `wo` in the incident frame
     /// (`lwx, lwy, lwz` is `wi` there).
-    /// Where `wi.x` and `wo.x` have opposite signs, `sx` comes from the unit-vector identity
-    /// the kernel's `half_vector::sum` uses, free of the sum's cancellation.
+    /// The tangent part is computed along `wi`'s azimuth and, where it cancels, from the
+    /// unit-vector identity, as the kernel's `half_vector::sum` does (`docs/math.md`, (58)).
     pub(super) fn half_vector_sum(&mut self, ox: &str, oy: &str, oz: &str) {
         self.decl(T::F, "sx", &format!("lwx + {ox}"));
         self.decl(T::F, "sy", &format!("lwy + {oy}"));
         self.decl(T::F, "sz", &format!("lwz + {oz}"));
+        let rho = self.math(Math::Sqrt, "lwx * lwx + lwy * lwy");
+        self.decl(T::F, "rho", &rho);
+        let zero = self.f(0.0);
+        self.code.open(format!("if (rho > {zero}) {{"));
+        self.decl(T::F, "hc", "lwx / rho");
+        self.decl(T::F, "hs", "lwy / rho");
+        self.decl(T::F, "ht", &format!("hc * {ox} + hs * {oy}"));
+        self.decl(T::F, "hp", &format!("hc * {oy} - hs * {ox}"));
+        self.decl(T::F, "st", "rho + ht");
+        let span = self.f(HALF_VECTOR_IDENTITY_SPAN);
         self.code
-            .open(format!("if (lwx * {ox} < {}) {{", self.f(0.0)));
+            .open(format!("if (ht < {zero} && rho - ht > {span}) {{"));
         self.code.line(format!(
-            "sx = (({oy} * {oy} - lwy * lwy) + ({oz} * {oz} - lwz * lwz)) / (lwx - {ox});"
+            "st = (hp * hp + ({oz} * {oz} - lwz * lwz)) / (rho - ht);"
         ));
+        self.code.close("}");
+        self.code.line("sx = hc * st - hs * hp;");
+        self.code.line("sy = hs * st + hc * hp;");
         self.code.close("}");
     }
 

@@ -485,8 +485,18 @@ static inline diffbsdf_tiny_half_vector_Result diffbsdf_tiny_half_vector_sample_
     float sx = lwx + r.x;
     float sy = lwy + r.y;
     float sz = lwz + r.z;
-    if (lwx * r.x < 0.0f) {
-        sx = ((r.y * r.y - lwy * lwy) + (r.z * r.z - lwz * lwz)) / (lwx - r.x);
+    float rho = sqrtf(lwx * lwx + lwy * lwy);
+    if (rho > 0.0f) {
+        float hc = lwx / rho;
+        float hs = lwy / rho;
+        float ht = hc * r.x + hs * r.y;
+        float hp = hc * r.y - hs * r.x;
+        float st = rho + ht;
+        if (ht < 0.0f && rho - ht > 1.0f) {
+            st = (hp * hp + (r.z * r.z - lwz * lwz)) / (rho - ht);
+        }
+        sx = hc * st - hs * hp;
+        sy = hs * st + hc * hp;
     }
     float ln_pdf = diffbsdf_tiny_half_vector_base_ln_pdf(cond, x0.x, x0.y) - ln_det + logf(sz / (2.0f * (sx * sx + sy * sy + sz * sz)));
     r.pdf = expf(ln_pdf);
@@ -681,8 +691,18 @@ static inline float diffbsdf_tiny_half_vector_pdf_impl(float wx, float wy, float
     float sx = lwx + lox;
     float sy = lwy + loy;
     float sz = lwz + wo.z;
-    if (lwx * lox < 0.0f) {
-        sx = ((loy * loy - lwy * lwy) + (wo.z * wo.z - lwz * lwz)) / (lwx - lox);
+    float rho = sqrtf(lwx * lwx + lwy * lwy);
+    if (rho > 0.0f) {
+        float hc = lwx / rho;
+        float hs = lwy / rho;
+        float ht = hc * lox + hs * loy;
+        float hp = hc * loy - hs * lox;
+        float st = rho + ht;
+        if (ht < 0.0f && rho - ht > 1.0f) {
+            st = (hp * hp + (wo.z * wo.z - lwz * lwz)) / (rho - ht);
+        }
+        sx = hc * st - hs * hp;
+        sy = hs * st + hc * hp;
     }
     float slen = sqrtf(sx * sx + sy * sy + sz * sz);
     if (!(slen > 0.0f)) {

@@ -473,8 +473,18 @@ fn diffbsdf_tiny_half_vector_sample_impl(wx: f32, wy: f32, wz: f32, u0: f32, u1:
     var sx: f32 = lwx + r.x;
     var sy: f32 = lwy + r.y;
     var sz: f32 = lwz + r.z;
-    if (lwx * r.x < 0.0f) {
-        sx = ((r.y * r.y - lwy * lwy) + (r.z * r.z - lwz * lwz)) / (lwx - r.x);
+    var rho: f32 = sqrt(lwx * lwx + lwy * lwy);
+    if (rho > 0.0f) {
+        var hc: f32 = lwx / rho;
+        var hs: f32 = lwy / rho;
+        var ht: f32 = hc * r.x + hs * r.y;
+        var hp: f32 = hc * r.y - hs * r.x;
+        var st: f32 = rho + ht;
+        if (ht < 0.0f && rho - ht > 1.0f) {
+            st = (hp * hp + (r.z * r.z - lwz * lwz)) / (rho - ht);
+        }
+        sx = hc * st - hs * hp;
+        sy = hs * st + hc * hp;
     }
     var ln_pdf: f32 = diffbsdf_tiny_half_vector_base_ln_pdf(cond, x0.x, x0.y) - ln_det + log(sz / (2.0f * (sx * sx + sy * sy + sz * sz)));
     r.pdf = exp(ln_pdf);
@@ -669,8 +679,18 @@ fn diffbsdf_tiny_half_vector_pdf_impl(wx: f32, wy: f32, wz: f32, ox: f32, oy: f3
     var sx: f32 = lwx + lox;
     var sy: f32 = lwy + loy;
     var sz: f32 = lwz + wo.z;
-    if (lwx * lox < 0.0f) {
-        sx = ((loy * loy - lwy * lwy) + (wo.z * wo.z - lwz * lwz)) / (lwx - lox);
+    var rho: f32 = sqrt(lwx * lwx + lwy * lwy);
+    if (rho > 0.0f) {
+        var hc: f32 = lwx / rho;
+        var hs: f32 = lwy / rho;
+        var ht: f32 = hc * lox + hs * loy;
+        var hp: f32 = hc * loy - hs * lox;
+        var st: f32 = rho + ht;
+        if (ht < 0.0f && rho - ht > 1.0f) {
+            st = (hp * hp + (wo.z * wo.z - lwz * lwz)) / (rho - ht);
+        }
+        sx = hc * st - hs * hp;
+        sy = hs * st + hc * hp;
     }
     var slen: f32 = sqrt(sx * sx + sy * sy + sz * sz);
     if (!(slen > 0.0f)) {
