@@ -88,10 +88,10 @@ pub const ROUND_MAGIC: f32 = 12_582_912.0;
 /// A direction is accepted when `| |w|^2 - 1 | <= UNIT_TOLERANCE` (and then normalised).
 pub const UNIT_TOLERANCE: f32 = 1e-3;
 
-/// The half-vector chart takes a tangent component of `s = wi + wo` from the unit-vector
-/// identity (`docs/math.md`, (58)) where `wi` and `wo` have opposite signs in it and
-/// `|wi_c - wo_c|` exceeds this: there the plain sum cancels and the identity's error
-/// (about the rounding of `wo` over `|wi_c - wo_c|`) is the smaller one.
+/// The half-vector chart takes the part of `s = wi + wo` along `wi`'s azimuth from the
+/// unit-vector identity (`docs/math.md`, (58)) where `wo`'s part along it, `t`, is negative
+/// and `rho - t` (`rho = |wi.xy|`) exceeds this: there the plain sum cancels and the
+/// identity's error (about the rounding of `wo` over `rho - t`) is the smaller one.
 pub const HALF_VECTOR_IDENTITY_SPAN: f32 = 1.0;
 
 /// Below this `|wi.xy|`, `wi` is the normal and the incident frame of an isotropic model is
