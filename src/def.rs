@@ -272,6 +272,10 @@ pub struct ModelDef {
     /// always the upper hemisphere on the disk). A sphere blob written before the flag
     /// existed has no bit and means [`IncidentRange::WholeSphere`].
     pub incident: IncidentRange,
+    /// The flow runs in the base distribution's standard coordinates
+    /// `z = (x - mu(wi)) / sigma(wi)` and its end point is mapped to the chart by `x = mu +
+    /// sigma z` (docs/math.md, §6.3; blob flag bit 2). Disk and half-vector chart only.
+    pub standardized: bool,
     /// A short label (codegen names things after it).
     pub name: ModelName,
 }
@@ -298,6 +302,7 @@ impl ModelDef {
             default_steps: 4,
             isotropic: false,
             incident: IncidentRange::UpperHemisphere,
+            standardized: false,
             name: ModelName::EMPTY,
         }
     }

@@ -3,7 +3,9 @@
 //! trajectory and the inverse of the flow. None of this is on the sampling hot path.
 //!
 //! Flow points `x` are in the frame the nets work in: for an isotropic model, the frame
-//! turned about the normal so that `wi` has `phi = 0` ([`crate::frame::IncidentFrame`]).
+//! turned about the normal so that `wi` has `phi = 0` ([`crate::frame::IncidentFrame`]);
+//! for a model with [`crate::ModelDef::standardized`], in the base's standard coordinates
+//! (docs/math.md, §6.3).
 
 use crate::any_model::{with_model, AnyModel};
 use crate::base::BaseDist;
@@ -87,7 +89,7 @@ impl<
         let points = points.get_mut(..steps as usize + 1)?;
         let domain = self.def.domain;
         let h = 1.0 / steps as f32;
-        let mut x = domain.advance(c.base.sample(uniform_pair(u)?), [0.0, 0.0]);
+        let mut x = domain.advance(self.flow_start(&c, uniform_pair(u)?), [0.0, 0.0]);
         let mut min_det = f32::INFINITY;
         for (k, slot) in points.iter_mut().enumerate() {
             *slot = x;
@@ -121,10 +123,11 @@ impl<
             }
         }
         let mut base_slope = 0.0f32;
-        if let Some(base) = self.base_distribution(wi) {
-            let at = base.ln_pdf(x0);
+        if let Some(wi) = unit_direction(wi) {
+            let c = self.condition(self.incident_frame(wi).1);
+            let at = self.start_ln_pdf(&c, x0);
             for (dx, dy) in [(DX, 0.0), (-DX, 0.0), (0.0, DX), (0.0, -DX)] {
-                let moved = base.ln_pdf([x0[0] + dx, x0[1] + dy]);
+                let moved = self.start_ln_pdf(&c, [x0[0] + dx, x0[1] + dy]);
                 base_slope = base_slope.max((moved - at).abs() / DX);
             }
         }

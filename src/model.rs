@@ -49,6 +49,7 @@ impl<
             && def.velocity.width as usize == VW
             && def.velocity.hidden_layers as usize == VM + 1
             && BE <= VE
+            && !(def.standardized && def.domain.is_spherical())
     }
 
     /// Loads and validates a blob.

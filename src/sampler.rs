@@ -98,8 +98,8 @@ impl<
         let steps = self.resolve_steps(steps)?;
         let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
-        let x = self.flow(&c, c.base.sample(u), steps);
-        let wo = self.def.domain.to_direction(x, wi)?;
+        let x = self.flow(&c, self.flow_start(&c, u), steps);
+        let wo = self.def.domain.to_direction(self.chart_point(&c, x), wi)?;
         Some(frame.to_world(wo)).filter(|wo| wo.is_finite())
     }
 
@@ -112,11 +112,12 @@ impl<
         let steps = self.resolve_steps(steps)?;
         let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
-        let x0 = c.base.sample(u);
+        let x0 = self.flow_start(&c, u);
         let (x, ln_det) = self.flow_with_ln_det(&c, x0, steps)?;
+        let x = self.chart_point(&c, x);
         let wo = self.def.domain.to_direction(x, wi)?;
         // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (docs/math.md, (38))
-        let ln_pdf = c.base.ln_pdf(x0) - ln_det + self.def.domain.ln_measure(x, wo, wi);
+        let ln_pdf = self.start_ln_pdf(&c, x0) - ln_det + self.def.domain.ln_measure(x, wo, wi);
         let pdf = exp(ln_pdf);
         let wo = frame.to_world(wo);
         (wo.is_finite() && pdf.is_finite() && pdf > 0.0).then_some(Sample { wo, pdf })
@@ -139,8 +140,8 @@ impl<
         let wo = frame.to_local(wo);
         let y = domain.point_of(wo, wi)?;
         let c = self.condition(wi);
-        let (x0, ln_det) = self.flow_inverse(&c, y, steps)?;
-        let ln_pdf = c.base.ln_pdf(x0) - ln_det + domain.ln_measure(y, wo, wi);
+        let (x0, ln_det) = self.flow_inverse(&c, self.flow_point(&c, y), steps)?;
+        let ln_pdf = self.start_ln_pdf(&c, x0) - ln_det + domain.ln_measure(y, wo, wi);
         let pdf = exp(ln_pdf);
         pdf.is_finite().then_some(pdf)
     }

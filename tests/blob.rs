@@ -6,7 +6,7 @@ mod support;
 use diffbsdf::internals::blob::{blob_len, crc32, write_blob, Blob, CHECKSUM_LEN, HEADER_LEN};
 use diffbsdf::{BlobError, Model3x32, Model4x32, ModelName, Precision};
 use proptest::prelude::*;
-use support::{random_disk, random_sphere};
+use support::{random_disk, random_sphere, random_standardized_half_vector};
 
 fn blob_of(m: &Model3x32, precision: Precision) -> Vec<u8> {
     let mut def = *m.def();
@@ -148,13 +148,45 @@ fn header_errors_behind_a_valid_checksum() {
     assert_eq!(steps(max), Ok(u32::from(max)));
     assert!(matches!(steps(max + 1), Err(BlobError::BadHeader(_))));
     assert!(matches!(steps(u16::MAX), Err(BlobError::BadHeader(_))));
-    // Flags: bit 0 (isotropic) and bit 1 (upper hemisphere) are the only ones defined.
-    assert!(matches!(case(28, 4), BlobError::BadHeader(_)));
+    // Flags: bit 0 (isotropic), bit 1 (upper hemisphere) and bit 2 (standard
+    // coordinates) are the only ones defined.
+    assert!(matches!(case(28, 8), BlobError::BadHeader(_)));
+    assert_eq!(
+        Model3x32::from_blob(&{
+            let mut b = good.clone();
+            b[28] = 4;
+            reseal(&mut b);
+            b
+        })
+        .map(|m| m.def().standardized),
+        Ok(true)
+    );
     assert!(matches!(case(31, 1), BlobError::BadHeader(_)));
     assert!(matches!(case(13, 9), BlobError::BadHeader(_)));
     // A sphere blob has the disk's shape but another domain: the feature count changes
     // the parameter count.
     assert!(matches!(case(10, 1), BlobError::ParamCountMismatch { .. }));
+}
+
+/// Standard coordinates exist only on the disk-type domains: a sphere blob with the flag is
+/// a header error, and the flag survives a write / read round trip.
+#[test]
+fn standard_coordinates_flag_round_trips_and_is_refused_on_the_sphere() {
+    let sphere = random_sphere(3, 2);
+    let mut b = vec![0u8; blob_len(sphere.def())];
+    sphere.write_blob(Precision::F32, &mut b).unwrap();
+    b[28] |= 4;
+    reseal(&mut b);
+    assert!(matches!(
+        Model4x32::from_blob(&b),
+        Err(BlobError::BadHeader(_))
+    ));
+    let m = random_standardized_half_vector(4, 2);
+    let bytes = blob_of(&m, Precision::F32);
+    assert_eq!(bytes[28] & 4, 4);
+    let back = Model3x32::from_blob(&bytes).unwrap();
+    assert_eq!(back.def(), m.def());
+    assert_eq!(params_of(&back), params_of(&m));
 }
 
 #[test]

@@ -7,7 +7,7 @@ use diffbsdf::glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 use support::{
     direction, random_disk, random_isotropic_equatorial, random_isotropic_half_vector,
-    random_sphere,
+    random_sphere, random_standardized_half_vector,
 };
 
 /// Allowed error of `integral + lost mass` against 1.
@@ -136,15 +136,36 @@ fn equatorial_pdf_integrates_to_one_minus_lost_mass() {
 /// projected disk would have an integrable singularity at the rim.
 #[test]
 fn half_vector_pdf_integrates_to_one_minus_lost_mass() {
-    for (seed, steps, a, b) in [
-        (31u64, 4u32, 0.2f32, 0.1f32),
-        (32, 2, 0.8, 0.5),
-        (33, 8, 0.02, 0.8),
-    ] {
-        let m = random_isotropic_half_vector(seed, 2);
+    half_vector_totals(
+        "half vector",
+        random_isotropic_half_vector,
+        [(31, 4, 0.2, 0.1), (32, 2, 0.8, 0.5), (33, 8, 0.02, 0.8)],
+    );
+}
+
+/// The same with the flow in the base's standard coordinates (docs/math.md, §6.3): the map
+/// `x = mu + sigma z` and its constant Jacobian are accounted for exactly.
+#[test]
+fn standardized_half_vector_pdf_integrates_to_one_minus_lost_mass() {
+    half_vector_totals(
+        "standardized half vector",
+        random_standardized_half_vector,
+        [(41, 4, 0.2, 0.1), (42, 2, 0.7, 0.5), (43, 8, 0.05, 0.8)],
+    );
+}
+
+/// [`check_total`] for half-vector models made by `model(seed, 2)`, one per
+/// `(seed, steps, a, b)` (`wi = direction(a, b)` above the surface).
+fn half_vector_totals(
+    label: &str,
+    model: fn(u64, u32) -> diffbsdf::Model3x32,
+    cases: [(u64, u32, f32, f32); 3],
+) {
+    for (seed, steps, a, b) in cases {
+        let m = model(seed, 2);
         let wi = direction(a, b, true);
         let integral = sphere_integral(|wo| m.pdf_steps(wi, wo, steps));
         let lost = lost_mass(|u| m.sample_direction_steps(wi, u, steps).is_some());
-        check_total(&format!("half vector seed {seed}"), integral, lost);
+        check_total(&format!("{label} seed {seed}"), integral, lost);
     }
 }

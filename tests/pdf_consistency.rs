@@ -9,7 +9,7 @@ use proptest::prelude::*;
 use support::{
     direction, random_disk, random_equatorial, random_half_vector, random_isotropic_disk,
     random_isotropic_equatorial, random_isotropic_half_vector, random_isotropic_sphere,
-    random_sphere, rel,
+    random_sphere, random_standardized_disk, random_standardized_half_vector, rel,
 };
 
 /// Allowed relative difference between `pdf(wi, wo)` and the sampled PDF, or, where one
@@ -89,5 +89,15 @@ consistency!(
 consistency!(
     isotropic_half_vector_pdf_of_sample_matches_sampled_pdf,
     random_isotropic_half_vector,
+    true
+);
+consistency!(
+    standardized_disk_pdf_of_sample_matches_sampled_pdf,
+    random_standardized_disk,
+    true
+);
+consistency!(
+    standardized_half_vector_pdf_of_sample_matches_sampled_pdf,
+    random_standardized_half_vector,
     true
 );

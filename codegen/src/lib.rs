@@ -209,9 +209,10 @@ pub(crate) fn header_lines(model: &ModelDesc, options: &Options, prefix: &str) -
         ),
         format!("model \"{name}\", blob CRC-32 {:08x}, {} parameters", model.crc32, model.params.len()),
         format!(
-            "domain {domain}{}{}; base net {}x{} ({} freqs), velocity net {}x{} ({} freqs); {} default steps",
+            "domain {domain}{}{}{}; base net {}x{} ({} freqs), velocity net {}x{} ({} freqs); {} default steps",
             if d.isotropic { ", isotropic (nets see wi turned to phi = 0)" } else { "" },
             if d.domain.is_spherical() && !d.accepts_incident_z(-1.0) { ", wi above the surface only" } else { "" },
+            if d.standardized { ", flow in the base's standard coordinates" } else { "" },
             d.base.hidden_layers, d.base.width, d.base.freqs, d.velocity.hidden_layers,
             d.velocity.width, d.velocity.freqs, d.default_steps
         ),

@@ -57,6 +57,7 @@ fn architecture(d: &ModelDef) -> impl PartialEq {
         d.velocity,
         d.isotropic,
         d.accepts_incident_z(-1.0),
+        d.standardized,
     )
 }
 

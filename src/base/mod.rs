@@ -8,6 +8,7 @@
 //! to [`LN_SCALE_MIN`, `LN_SCALE_MAX`] so every density stays finite.
 
 pub mod gaussian;
+mod standard;
 pub mod wrapped_cauchy;
 
 use crate::def::Domain;

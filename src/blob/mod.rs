@@ -148,8 +148,14 @@ impl RawHeader {
         let domain = Domain::from_code(self.domain).ok_or(BlobError::UnknownDomain(self.domain))?;
         let activation = Activation::from_code(self.activation)
             .ok_or(BlobError::UnknownActivation(self.activation))?;
-        if self.flags & !(FLAG_ISOTROPIC | FLAG_UPPER_HEMISPHERE) != 0 {
+        if self.flags & !(FLAG_ISOTROPIC | FLAG_UPPER_HEMISPHERE | FLAG_STANDARDIZED) != 0 {
             return Err(BlobError::BadHeader("unknown flag bits are set"));
+        }
+        let standardized = self.flags & FLAG_STANDARDIZED != 0;
+        if standardized && domain.is_spherical() {
+            return Err(BlobError::BadHeader(
+                "standard coordinates on a spherical domain",
+            ));
         }
         check_shape(self.base, "base net")?;
         check_shape(self.velocity, "velocity net")?;
@@ -183,6 +189,7 @@ impl RawHeader {
             } else {
                 IncidentRange::WholeSphere
             },
+            standardized,
             name,
         };
         let from_shape = def.param_count();
@@ -198,6 +205,10 @@ impl RawHeader {
 
 /// Header flag (bytes 28..32, u32): the model is isotropic.
 pub(crate) const FLAG_ISOTROPIC: u32 = 1;
+
+/// Header flag: the flow runs in the base distribution's standard coordinates
+/// ([`ModelDef::standardized`]; disk and half-vector chart only).
+pub(crate) const FLAG_STANDARDIZED: u32 = 4;
 /// Header flag: the model is defined for `wi` above the surface only
 /// ([`IncidentRange::UpperHemisphere`]); implied on the disk, written there too.
 pub(crate) const FLAG_UPPER_HEMISPHERE: u32 = 2;

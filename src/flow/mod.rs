@@ -52,4 +52,46 @@ impl<
             base,
         }
     }
+
+    /// The flow's start point for `u`: `x0` (26) / (27), or `z0` (59) in standard
+    /// coordinates.
+    #[inline(always)]
+    pub(crate) fn flow_start(&self, c: &Conditioned<VW>, u: [f32; 2]) -> [f32; 2] {
+        if self.def.standardized {
+            BaseDist::standard_sample(u)
+        } else {
+            c.base.sample(u)
+        }
+    }
+
+    /// `ln p0` of the chart point the start point `p0` stands for: (32) / (34), or (60).
+    #[inline(always)]
+    pub(crate) fn start_ln_pdf(&self, c: &Conditioned<VW>, p0: [f32; 2]) -> f32 {
+        if self.def.standardized {
+            c.base.standard_ln_pdf(p0)
+        } else {
+            c.base.ln_pdf(p0)
+        }
+    }
+
+    /// The chart point of the flow's end point: itself, or (61) in standard coordinates.
+    #[inline(always)]
+    pub(crate) fn chart_point(&self, c: &Conditioned<VW>, p: [f32; 2]) -> [f32; 2] {
+        if self.def.standardized {
+            c.base.from_standard(p)
+        } else {
+            p
+        }
+    }
+
+    /// The flow's end point for the chart point `y`: itself, or (62) in standard
+    /// coordinates.
+    #[inline(always)]
+    pub(crate) fn flow_point(&self, c: &Conditioned<VW>, y: [f32; 2]) -> [f32; 2] {
+        if self.def.standardized {
+            c.base.to_standard(y)
+        } else {
+            y
+        }
+    }
 }

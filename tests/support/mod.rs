@@ -281,6 +281,37 @@ pub fn random_half_vector(seed: u64, min_steps: u32) -> Model3x32 {
     Model3x32::from_params(def, &p).unwrap()
 }
 
+/// [`random_isotropic_half_vector`] with its flow in the base's standard coordinates
+/// (docs/math.md, §6.3), the base narrowed to `sigma` about 0.14 and moved off the centre so
+/// that the map from the flow to the chart is far from the identity.
+pub fn random_standardized_half_vector(seed: u64, min_steps: u32) -> Model3x32 {
+    standardized(&random_isotropic_half_vector(seed, min_steps))
+}
+
+/// [`random_disk`] with its flow in the base's standard coordinates, as
+/// [`random_standardized_half_vector`].
+pub fn random_standardized_disk(seed: u64, min_steps: u32) -> Model3x32 {
+    standardized(&random_disk(seed, min_steps))
+}
+
+fn standardized(m: &Model3x32) -> Model3x32 {
+    let mut def = *m.def();
+    def.standardized = true;
+    let mut p = vec![0.0; def.param_count()];
+    m.params(&mut p).unwrap();
+    // The base readout (rows mu_0, mu_1, ln sigma_0, ln sigma_1 of `width` weights, then
+    // the four biases): a tenth of its dependence on `wi`, centred at (0.1, -0.05) with
+    // sigma about 0.14.
+    let outputs = diffbsdf::spec::BASE_OUTPUTS;
+    let bias = def.net_param_count(Net::Base) - outputs;
+    let weights = bias - outputs * def.base.width as usize;
+    for w in &mut p[weights..bias] {
+        *w *= 0.1;
+    }
+    p[bias..bias + outputs].copy_from_slice(&[0.1, -0.05, -2.0, -2.0]);
+    Model3x32::from_params(def, &p).unwrap()
+}
+
 /// [`random_half_vector`], flagged isotropic.
 pub fn random_isotropic_half_vector(seed: u64, min_steps: u32) -> Model3x32 {
     let m = random_half_vector(seed, min_steps);

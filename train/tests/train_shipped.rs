@@ -52,8 +52,12 @@ fn shipped_models_are_exact_and_invertible() {
                         let q = m.pdf(wi, s.wo);
                         assert!(q.is_finite(), "{name}: NaN pdf");
                         n += 1;
-                        let x0 = m.base_distribution(wi).map(|b| b.sample([u.x, u.y]));
-                        let x0 = x0.unwrap_or([0.0, 0.0]);
+                        // The flow's start point (in standard coordinates where the
+                        // model's flow runs in them).
+                        let mut pts = vec![[0.0f32; 2]; m.default_steps() as usize + 1];
+                        let x0 = m
+                            .trajectory(wi, u, m.default_steps(), &mut pts)
+                            .map_or([0.0, 0.0], |_| pts[0]);
                         if !m.pdf_consistent(wi, s.wo, s.pdf, q, x0) {
                             bad += 1;
                             if bad <= 3 {

@@ -34,6 +34,15 @@ pub enum DomainArg {
     Auto,
 }
 
+/// Coordinates of the flow on the command line (`ModelDef::standardized`).
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum CoordinatesArg {
+    /// The base distribution's standard coordinates (disk and half-vector chart).
+    Standard,
+    /// The chart's own coordinates.
+    Chart,
+}
+
 impl DomainArg {
     /// The domains to try, cheapest first.
     pub fn candidates(self, material: &dyn diffbsdf_materials::Material) -> Vec<Domain> {
@@ -150,6 +159,12 @@ pub struct FitArgs {
     /// Train the student only at its Euler times k/N.
     #[arg(long)]
     pub euler_times: bool,
+    /// Coordinates of the flow on the disk and the half-vector chart: the base
+    /// distribution's standard coordinates z = (x - mu) / sigma, or the chart's own
+    /// (docs/math.md, section 6.3). Default: standard on the half-vector chart with the
+    /// default recipe, the chart's otherwise.
+    #[arg(long, value_enum)]
+    pub coordinates: Option<CoordinatesArg>,
     /// Condition on the full wi even when the material is isotropic (by default an
     /// isotropic material is fitted in the incident frame: wi turned to phi = 0).
     #[arg(long)]
@@ -354,6 +369,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     set(&mut c.student.iters, args.student_iters);
     set(&mut c.teacher.batch, args.batch);
     c.student_euler_times |= args.euler_times;
+    if let Some(k) = args.coordinates {
+        c.def.standardized = k == CoordinatesArg::Standard && !domain.is_spherical();
+    }
     if args.ignore_isotropy {
         c.use_isotropy = false;
     }

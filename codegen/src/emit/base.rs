@@ -103,9 +103,20 @@ impl Emitter<'_> {
     pub(super) fn base_sample(&mut self) {
         let cond_t = self.st("Cond");
         let vec_t = self.st("Vec2");
-        self.code
-            .line("// x0 for u: the deterministic map of the base distribution.");
-        let ps = [(cond_t, "cond"), (T::F, "u0"), (T::F, "u1")];
+        if self.standardized() {
+            self.code.line(
+                "// z0 for u: the standard normal's quantiles (the flow runs in standard coordinates).",
+            );
+        } else {
+            self.code
+                .line("// x0 for u: the deterministic map of the base distribution.");
+        }
+        // In standard coordinates z0 does not depend on wi: no `cond`.
+        let ps = if self.standardized() {
+            vec![(T::F, "u0"), (T::F, "u1")]
+        } else {
+            vec![(cond_t, "cond"), (T::F, "u0"), (T::F, "u1")]
+        };
         self.fn_open(vec_t.clone(), "base_sample", false, &ps);
         let r = self.d.decl(&vec_t, "r", None);
         self.code.line(r);
@@ -116,6 +127,11 @@ impl Emitter<'_> {
             let g = self.math(Math::Exp, "cond.p3");
             let wc = self.call("wrapped_cauchy_sample", false, &["u1", &g]);
             self.code.line(format!("r.y = cond.p2 + {wc};"));
+        } else if self.standardized() {
+            // docs/math.md, (59).
+            let q1 = self.call("quantile", false, &["u1"]);
+            self.code.line(format!("r.x = {q0};"));
+            self.code.line(format!("r.y = {q1};"));
         } else {
             let q1 = self.call("quantile", false, &["u1"]);
             let e2 = self.math(Math::Exp, "cond.p2");
@@ -125,6 +141,42 @@ impl Emitter<'_> {
         }
         self.code.line("return r;");
         self.end_fn();
+    }
+
+    /// The arguments of a `base_sample` call.
+    pub(super) fn base_sample_call(&self) -> String {
+        if self.standardized() {
+            self.call("base_sample", false, &["u0", "u1"])
+        } else {
+            self.call("base_sample", false, &["cond", "u0", "u1"])
+        }
+    }
+
+    /// Turns the flow's end point `(a, b)` into the chart point `mu + sigma z` in standard
+    /// coordinates (docs/math.md, (61)); nothing otherwise.
+    pub(super) fn chart_point(&mut self) {
+        if !self.standardized() {
+            return;
+        }
+        self.code
+            .line("// The end point in chart coordinates: x = mu + sigma z (docs/math.md, (61)).");
+        let e2 = self.math(Math::Exp, "cond.p2");
+        let e3 = self.math(Math::Exp, "cond.p3");
+        self.code.line(format!("a = cond.p0 + {e2} * a;"));
+        self.code.line(format!("b = cond.p1 + {e3} * b;"));
+    }
+
+    /// The flow's end point for the chart point `(ya, yb)`: `(x - mu) / sigma` in standard
+    /// coordinates (docs/math.md, (62)), the point itself otherwise.
+    pub(super) fn flow_point(&mut self) -> (&'static str, &'static str) {
+        if !self.standardized() {
+            return ("ya", "yb");
+        }
+        let e2 = self.math(Math::Exp, "-cond.p2");
+        let e3 = self.math(Math::Exp, "-cond.p3");
+        self.decl(T::F, "za", &format!("(ya - cond.p0) * {e2}"));
+        self.decl(T::F, "zb", &format!("(yb - cond.p1) * {e3}"));
+        ("za", "zb")
     }
 
     pub(super) fn base_ln_pdf(&mut self) {
@@ -142,10 +194,16 @@ impl Emitter<'_> {
             self.code
                 .line(format!("return {mh} * z * z + {c} - cond.p1 + {wc};"));
         } else {
-            let e0 = self.math(Math::Exp, "-cond.p2");
-            let e1 = self.math(Math::Exp, "-cond.p3");
-            self.decl(T::F, "z0", &format!("(x0 - cond.p0) * {e0}"));
-            self.decl(T::F, "z1", &format!("(x1 - cond.p1) * {e1}"));
+            if self.standardized() {
+                // The start point is z0 already (docs/math.md, (60)).
+                self.decl(T::F, "z0", "x0");
+                self.decl(T::F, "z1", "x1");
+            } else {
+                let e0 = self.math(Math::Exp, "-cond.p2");
+                let e1 = self.math(Math::Exp, "-cond.p3");
+                self.decl(T::F, "z0", &format!("(x0 - cond.p0) * {e0}"));
+                self.decl(T::F, "z1", &format!("(x1 - cond.p1) * {e1}"));
+            }
             self.code.line(format!(
                 "return ({mh} * z0 * z0 + {c}) + ({mh} * z1 * z1 + {c}) - cond.p2 - cond.p3;"
             ));

@@ -46,7 +46,7 @@ impl Emitter<'_> {
         ];
         self.fn_open(rt.clone(), "direction_impl", true, &ps);
         self.prologue(true, &none);
-        let bs = self.call("base_sample", false, &["cond", "u0", "u1"]);
+        let bs = self.base_sample_call();
         self.decl(self.st("Vec2"), "x0", &bs);
         self.start_point("x0.x", "x0.y");
         self.for_open("k", "n");
@@ -58,6 +58,7 @@ impl Emitter<'_> {
             self.code.line(l);
         }
         self.code.close("}");
+        self.chart_point();
         let td = self.call("to_direction", false, &self.point_args("a", "b"));
         if self.m.def.isotropic {
             self.decl(rt, "r", &td);
@@ -85,7 +86,7 @@ impl Emitter<'_> {
         ];
         self.fn_open(rt.clone(), "sample_impl", true, &ps);
         self.prologue(true, &none);
-        let bs = self.call("base_sample", false, &["cond", "u0", "u1"]);
+        let bs = self.base_sample_call();
         self.decl(self.st("Vec2"), "x0", &bs);
         self.start_point("x0.x", "x0.y");
         self.decl(T::F, "ln_det", &self.f(0.0));
@@ -110,6 +111,7 @@ impl Emitter<'_> {
             self.code.line(l);
         }
         self.code.close("}");
+        self.chart_point();
         let td = self.call("to_direction", false, &self.point_args("a", "b"));
         self.decl(rt, "r", &td);
         self.code.open(format!("if (!(r.pdf > {zero})) {{"));

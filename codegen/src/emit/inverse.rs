@@ -342,7 +342,8 @@ impl Emitter<'_> {
             self.decl(T::F, "ya", ox);
             self.decl(T::F, "yb", oy);
         }
-        self.start_point("ya", "yb");
+        let (fa, fb) = self.flow_point();
+        self.start_point(fa, fb);
         self.decl(T::F, "ln_det", &zero);
         let t_end = format!("{} * h", self.d.cast(&T::F, "n"));
         let v_end = self.call("velocity", true, &["cond", &t_end, "a", "b"]);

@@ -125,6 +125,11 @@ impl<'a> Emitter<'a> {
     fn half_vector(&self) -> bool {
         self.m.def.domain == Domain::HalfVector
     }
+    /// The flow runs in the base's standard coordinates `z = (x - mu) / sigma`
+    /// (docs/math.md, section 6.3).
+    fn standardized(&self) -> bool {
+        self.m.def.standardized
+    }
     fn needs_velocity(&self) -> bool {
         self.e.direction || self.e.pdf
     }
