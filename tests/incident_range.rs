@@ -81,7 +81,7 @@ fn the_flag_round_trips_and_old_sphere_blobs_mean_every_wi() {
     assert!(!disk.accepts_incident_z(-0.5));
     // Unknown flag bits are still rejected.
     let mut bad = blob(whole.def(), &params);
-    bad[28] |= 4;
+    bad[28] |= 8;
     let n = bad.len() - 4;
     let crc = diffbsdf::internals::blob::crc32(&bad[..n]);
     bad[n..].copy_from_slice(&crc.to_le_bytes());

@@ -64,7 +64,14 @@ fn every_blob_error_has_its_status() {
     b[12] = 7;
     assert_eq!(load(&reseal(b)), DIFFBSDF_ERR_UNKNOWN_ACTIVATION);
     let mut b = good.clone();
-    b[28] = 4; // an unknown flag bit (bit 0 is "isotropic", bit 1 "upper hemisphere")
+    b[28] = 8; // an unknown flag bit (0: isotropic, 1: upper hemisphere, 2: standard coordinates)
+    assert_eq!(load(&reseal(b)), DIFFBSDF_ERR_BAD_HEADER);
+    // Standard coordinates (flag bit 2) exist on the disk, not on the sphere.
+    let mut b = good.clone();
+    b[28] = 4;
+    assert_eq!(load(&reseal(b)), DIFFBSDF_OK);
+    let mut b = blob(&ModelDef::paper_sphere());
+    b[28] |= 4;
     assert_eq!(load(&reseal(b)), DIFFBSDF_ERR_BAD_HEADER);
     let mut b = good.clone();
     b[24] ^= 1; // declared parameter count (the length check sees it first)
