@@ -84,11 +84,8 @@ impl BaseDist {
     #[must_use]
     pub fn ln_pdf(&self, x0: [f32; 2]) -> f32 {
         match *self {
-            BaseDist::Disk { mu, ln_sigma } => {
-                let z0 = (x0[0] - mu[0]) * exp(-ln_sigma[0]);
-                let z1 = (x0[1] - mu[1]) * exp(-ln_sigma[1]);
-                gaussian::ln_pdf(z0) + gaussian::ln_pdf(z1) - ln_sigma[0] - ln_sigma[1]
-            }
+            // (32): (60) at the standard coordinates of x0.
+            BaseDist::Disk { .. } => self.standard_ln_pdf(self.to_standard(x0)),
             BaseDist::Sphere {
                 mu_theta,
                 ln_sigma,
