@@ -183,7 +183,7 @@ fn generated_c_matches_kernel() {
         }
     }
     println!("generated C vs kernel, all models: {total:?}");
-    total.assert_raw_bounds("generated C", false);
+    total.assert_raw_bounds("generated C", RAW_DIR_F32, Some(RAW_PDF_F32));
     assert!(
         total.valid * 2 > total.compared,
         "most vectors should be valid: {total:?}"

@@ -4,7 +4,6 @@
 
 mod support;
 
-use diffbsdf::Domain;
 use diffbsdf_codegen::set::same_architecture;
 use diffbsdf_codegen::{generate, EntryPoints, Float, Language, ModelDesc, Options, Weights};
 use support::gpu::{lavapipe, Gpu};
@@ -58,18 +57,24 @@ fn compare(
     steps: u32,
     ep: EntryPoints,
     half: bool,
-    total: &mut Errors,
+    total: &mut Totals,
 ) {
     let (tol_dir, tol_pdf) = if half {
         (F16_DIR, F16_PDF)
     } else {
         (TOL_F32, TOL_F32)
     };
-    let mut e = Errors::default();
+    let mut interior = Errors::default();
+    let mut edge = Errors::default();
     let mut flips = 0usize;
     let n = c.samples.len();
     for (i, &(wi, u)) in c.samples.iter().enumerate() {
         let what = format!("{label} steps {steps} wi {wi:?} u {u:?}");
+        let e = if u_at_edge(u) {
+            &mut edge
+        } else {
+            &mut interior
+        };
         let (a, b) = (out[2 * i], out[2 * i + 1]);
         let tol_dir = tol_dir * kernel.amplification(wi, u, steps);
         if ep.direction {
@@ -77,7 +82,7 @@ fn compare(
             if half && d.is_some() != (a[..3] != [0.0; 3]) {
                 flips += 1;
             } else {
-                check_dir(&what, [a[0], a[1], a[2]], d, tol_dir, &mut e);
+                check_dir(&what, [a[0], a[1], a[2]], d, tol_dir, e);
             }
         }
         if ep.sample {
@@ -85,7 +90,7 @@ fn compare(
             if half && s.is_some() != (b[3] > 0.0) {
                 flips += 1;
             } else {
-                check_dir(&what, [b[0], b[1], b[2]], s.map(|s| s.0), tol_dir, &mut e);
+                check_dir(&what, [b[0], b[1], b[2]], s.map(|s| s.0), tol_dir, e);
                 // The sampled PDF is the density at the sampled direction: allowed what a PDF
                 // of that direction is (the measure's and the density's condition there).
                 let mc = s.map_or(0.0, |s| {
@@ -93,19 +98,12 @@ fn compare(
                         .max(kernel.pdf_condition(wi, s.0, steps))
                 });
                 let amp = kernel.amplification(wi, u, steps);
-                check_pdf(
-                    &what,
-                    b[3],
-                    s.map_or(0.0, |s| s.1),
-                    mc,
-                    tol_pdf * amp,
-                    &mut e,
-                );
+                check_pdf(&what, b[3], s.map_or(0.0, |s| s.1), mc, tol_pdf * amp, e);
             }
         }
     }
     if !ep.pdf {
-        return finish(label, steps, e, flips, n, total);
+        return finish(label, steps, [interior, edge], flips, n, total);
     }
     for (i, &(wi, wo)) in c.pdfs.iter().enumerate() {
         let what = format!("{label} steps {steps} pdf wi {wi:?} wo {wo:?}");
@@ -121,49 +119,72 @@ fn compare(
             want,
             measure_condition(kernel.domain(), wi, wo).max(kernel.pdf_condition(wi, wo, steps)),
             tol_pdf,
-            &mut e,
+            &mut interior,
         );
     }
-    finish(label, steps, e, flips, n + c.pdfs.len(), total)
+    finish(
+        label,
+        steps,
+        [interior, edge],
+        flips,
+        n + c.pdfs.len(),
+        total,
+    )
 }
 
-fn finish(label: &str, steps: u32, e: Errors, flips: usize, vectors: usize, total: &mut Errors) {
+/// A run's largest errors: on vectors whose `u` is inside (0, 1) and on those with `u` at
+/// an end of [0, 1] ([`u_at_edge`]; the PDF vectors count as inside).
+#[derive(Default)]
+struct Totals {
+    interior: Errors,
+    edge: Errors,
+}
+
+fn finish(
+    label: &str,
+    steps: u32,
+    [interior, edge]: [Errors; 2],
+    flips: usize,
+    vectors: usize,
+    total: &mut Totals,
+) {
     let share = flips as f32 / vectors as f32;
-    println!("{label} steps {steps}: {e:?}, validity flips {flips} ({share:.4})");
+    println!(
+        "{label} steps {steps}: u inside {interior:?}, u at an end {edge:?}, validity flips {flips} ({share:.4})"
+    );
     assert!(
         share <= F16_FLIPS,
         "{label}: {flips} validity flips ({share}) > {F16_FLIPS}"
     );
-    total.merge(&e);
+    total.interior.merge(&interior);
+    total.edge.merge(&edge);
 }
 
-/// The entry points executed for an architecture, each its own pipeline in buffer mode
-/// (one pipeline serves every model of the architecture), in both languages: all three
-/// in f32 everywhere and in f16 on the disk and the half-vector chart (the disk's nets); on
-/// the sphere architectures the f16
-/// direction only, since there f16 networks put the sampled PDF up to 16 % from the
-/// kernel's, beyond the f16 bound (docs/codegen.md).
-fn plan(float: Float, domain: Domain) -> Vec<EntryPoints> {
-    let one = |direction, sample, pdf| EntryPoints {
-        direction,
-        sample,
-        pdf,
-    };
-    match (float, domain) {
-        (Float::F32, _) | (Float::F16, Domain::Disk | Domain::HalfVector) => vec![
-            one(true, false, false),
-            one(false, true, false),
-            one(false, false, true),
-        ],
-        (Float::F16, _) => vec![one(true, false, false)],
-    }
-}
+/// The entry points executed for every architecture, f32 and f16, each its own pipeline
+/// in buffer mode (one pipeline serves every model of the architecture).
+const PLAN: [EntryPoints; 3] = [
+    EntryPoints {
+        direction: true,
+        sample: false,
+        pdf: false,
+    },
+    EntryPoints {
+        direction: false,
+        sample: true,
+        pdf: false,
+    },
+    EntryPoints {
+        direction: false,
+        sample: false,
+        pdf: true,
+    },
+];
 
-fn run_language(language: Language, float: Float) -> Errors {
+fn run_language(language: Language, float: Float) {
     let gpu: Gpu = lavapipe();
     println!("device: {}", gpu.name);
     let dir = scratch(&format!("gpu_{language:?}_{float:?}"));
-    let mut total = Errors::default();
+    let mut total = Totals::default();
     let models = test_models();
     // One pipeline per (architecture, entry points), shared by the models of that shape.
     let mut shapes: Vec<Vec<&TestModel>> = Vec::new();
@@ -184,8 +205,7 @@ fn run_language(language: Language, float: Float) -> Errors {
             .expect("blob")
             .params
             .len();
-        let domain = ModelDesc::from_blob(&first.blob).expect("blob").def.domain;
-        for e in &plan(float, domain) {
+        for e in &PLAN {
             let weights = Weights::Buffer { set: 0, binding: 0 };
             let o = Options {
                 language,
@@ -241,13 +261,29 @@ fn run_language(language: Language, float: Float) -> Errors {
             }
         }
     }
-    println!("{language:?} {float:?} on lavapipe vs kernel: {total:?}");
-    total.assert_raw_bounds(&format!("{language:?} {float:?}"), float == Float::F16);
+    let (interior, edge) = (total.interior, total.edge);
+    println!("{language:?} {float:?} on lavapipe vs kernel, u inside (0, 1): {interior:?}");
+    println!("{language:?} {float:?} on lavapipe vs kernel, u at an end of [0, 1]: {edge:?}");
+    let label = format!("{language:?} {float:?}");
+    match float {
+        // f16: the raw bounds with `u` inside (0, 1); at its ends the direction's, and
+        // each vector's own allowance (above).
+        Float::F16 => {
+            interior.assert_raw_bounds(&label, RAW_DIR_F16, Some(RAW_PDF_F16));
+            edge.assert_raw_bounds(&format!("{label} (u at an end)"), RAW_DIR_F16_EDGE, None);
+        }
+        _ => {
+            let mut all = interior;
+            all.merge(&edge);
+            all.assert_raw_bounds(&label, RAW_DIR_F32, Some(RAW_PDF_F32));
+        }
+    }
+    let valid = interior.valid + edge.valid;
+    let compared = interior.compared + edge.compared;
     assert!(
-        total.valid * 4 > total.compared,
-        "too few valid vectors: {total:?}"
+        valid * 4 > compared,
+        "too few valid vectors: {valid} of {compared}"
     );
-    total
 }
 
 #[test]
