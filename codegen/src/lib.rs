@@ -77,6 +77,25 @@ impl EntryPoints {
         sample: true,
         pdf: true,
     };
+
+    /// Each entry point alone (a shader compiled for one of them carries only its code).
+    pub const EACH_ALONE: [EntryPoints; 3] = [
+        EntryPoints {
+            direction: true,
+            sample: false,
+            pdf: false,
+        },
+        EntryPoints {
+            direction: false,
+            sample: true,
+            pdf: false,
+        },
+        EntryPoints {
+            direction: false,
+            sample: false,
+            pdf: true,
+        },
+    ];
 }
 
 /// Where the generated code reads the parameters from.

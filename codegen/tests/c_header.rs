@@ -43,26 +43,7 @@ fn compile(dir: &Path, header: &str, buffer: bool) -> PathBuf {
 fn header_compiles_as_cpp_with_each_entry_point_alone() {
     let dir = scratch("codegen_cpp");
     let blob = &test_models()[1].blob;
-    for (k, e) in [
-        EntryPoints {
-            direction: true,
-            sample: false,
-            pdf: false,
-        },
-        EntryPoints {
-            direction: false,
-            sample: true,
-            pdf: false,
-        },
-        EntryPoints {
-            direction: false,
-            sample: false,
-            pdf: true,
-        },
-    ]
-    .into_iter()
-    .enumerate()
-    {
+    for (k, e) in EntryPoints::EACH_ALONE.into_iter().enumerate() {
         let code = generate(blob, &options(Weights::Baked, e)).expect("generate");
         let h = dir.join(format!("gen{k}.h"));
         std::fs::write(&h, &code).expect("write");

@@ -160,26 +160,6 @@ fn finish(
     total.edge.merge(&edge);
 }
 
-/// The entry points executed for every architecture, f32 and f16, each its own pipeline
-/// in buffer mode (one pipeline serves every model of the architecture).
-const PLAN: [EntryPoints; 3] = [
-    EntryPoints {
-        direction: true,
-        sample: false,
-        pdf: false,
-    },
-    EntryPoints {
-        direction: false,
-        sample: true,
-        pdf: false,
-    },
-    EntryPoints {
-        direction: false,
-        sample: false,
-        pdf: true,
-    },
-];
-
 fn run_language(language: Language, float: Float) {
     let gpu: Gpu = lavapipe();
     println!("device: {}", gpu.name);
@@ -205,7 +185,7 @@ fn run_language(language: Language, float: Float) {
             .expect("blob")
             .params
             .len();
-        for e in &PLAN {
+        for e in &EntryPoints::EACH_ALONE {
             let weights = Weights::Buffer { set: 0, binding: 0 };
             let o = Options {
                 language,

@@ -10,27 +10,11 @@ use support::vectors::*;
 
 fn all_options(language: Language) -> Vec<Options> {
     let mut v = Vec::new();
-    let entries = [
-        EntryPoints::ALL,
-        EntryPoints {
-            direction: true,
-            sample: false,
-            pdf: false,
-        },
-        EntryPoints {
-            direction: false,
-            sample: true,
-            pdf: false,
-        },
-        EntryPoints {
-            direction: false,
-            sample: false,
-            pdf: true,
-        },
-    ];
+    let mut entries = vec![EntryPoints::ALL];
+    entries.extend(EntryPoints::EACH_ALONE);
     for float in [Float::F32, Float::F16] {
         for weights in [Weights::Baked, Weights::Buffer { set: 0, binding: 0 }] {
-            for entry_points in entries {
+            for &entry_points in &entries {
                 v.push(Options {
                     language,
                     float,
