@@ -1,21 +1,26 @@
-//! Times the generated WGSL on a GPU: `count` samples with their PDF (`sample`) and
-//! `count` PDFs of given directions (`pdf`) per dispatch, for the shipped rough-copper disk
-//! (3x32, N = 4) and sphere (4x32, N = 8) models with f32 and f16 arithmetic, the weights
-//! read from a storage buffer (`--weights buffer`, as a renderer with many materials binds
-//! them) or baked into the shader as constants (`--weights baked`).
+//! Times the generated WGSL on a GPU: `count` directions (`direction`), `count` samples
+//! with their PDF (`sample`) and `count` PDFs of given directions (`pdf`) per dispatch, for
+//! the shipped rough-copper disk (3x32, N = 4) and sphere (4x32, N = 8) models with f32 and
+//! f16 arithmetic, the weights read from a storage buffer (`buffer`, as a renderer with
+//! many materials binds them) and baked into the shader as constants (`baked`).
 //!
 //! ```text
 //! cargo run --release -p diffbsdf-codegen --example gpu_timing -- \
-//!     [--adapter NAME] [--count 1048576] [--repeats 10] [--models disk,sphere] \
-//!     [--floats f32,f16] [--weights buffer|baked]
+//!     [--adapter NAME] [--count 1048576] [--repeats 20] [--models disk,sphere] \
+//!     [--floats f32,f16] [--weights buffer,baked] [--checks on,off,...] [--workgroup 64]
 //! ```
 //!
 //! The adapter is the first discrete or integrated GPU (or the first whose name contains
 //! `NAME`); with none, the software one, whose figures say nothing about a GPU (and whose
 //! shader compiler takes minutes on the sphere shaders: use `--models disk` there). Each
-//! figure is the fastest of `repeats` dispatches, timed from submission to completion on
-//! the host (buffers uploaded once; the pipelines are compiled before timing). Not a test:
-//! nothing depends on a GPU.
+//! entry point runs once untimed, then `repeats` dispatches each timed on the GPU (the
+//! compute pass between two timestamp queries, where the adapter has them) and on the host
+//! (submission to completion); the table gives the best and the median of each, and the
+//! rate from the GPU median. `--checks on,off,no-bounds,no-loop-bound` also times each
+//! shader without the run-time checks wgpu adds to WGSL (index clamping, loop bounding),
+//! or without one of them. Buffers are uploaded once and the pipelines compiled before
+//! timing. Not a test: nothing depends on a GPU. `scripts/gpu.sh` runs the conformance
+//! tests on the GPU's driver and then this, in one command.
 
 #[path = "../tests/support/mod.rs"]
 #[allow(dead_code, unused_imports)]
@@ -33,17 +38,21 @@ struct Args {
     repeats: usize,
     models: Vec<String>,
     floats: Vec<String>,
-    baked: bool,
+    weights: Vec<String>,
+    checks: Vec<String>,
+    workgroup: usize,
 }
 
 fn args() -> Args {
     let mut a = Args {
         adapter: None,
         count: 1 << 20,
-        repeats: 10,
+        repeats: 20,
         models: vec!["disk".into(), "sphere".into()],
         floats: vec!["f32".into(), "f16".into()],
-        baked: false,
+        weights: vec!["buffer".into(), "baked".into()],
+        checks: vec!["on".into()],
+        workgroup: 64,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -55,7 +64,9 @@ fn args() -> Args {
             "--repeats" => a.repeats = value.parse().expect("--repeats: a number"),
             "--models" => a.models = list(&value),
             "--floats" => a.floats = list(&value),
-            "--weights" => a.baked = value == "baked",
+            "--weights" => a.weights = list(&value),
+            "--checks" => a.checks = list(&value),
+            "--workgroup" => a.workgroup = value.parse().expect("--workgroup: a number"),
             _ => panic!("unknown option {flag}"),
         }
     }
@@ -87,6 +98,40 @@ fn adapter(name: Option<&str>) -> wgpu::Adapter {
         .into_iter()
         .nth(index)
         .expect("index from the list")
+}
+
+/// The shader module of `source` with wgpu's run-time checks as `checks` says: `on` (all,
+/// wgpu's default), `off` (none), `no-bounds` (no index clamping) or `no-loop-bound` (no
+/// loop bounding).
+fn module(gpu: &Gpu, source: &str, checks: &str) -> wgpu::ShaderModule {
+    let desc = wgpu::ShaderModuleDescriptor {
+        label: None,
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    };
+    let mut runtime = wgpu::ShaderRuntimeChecks::checked();
+    match checks {
+        "on" => return gpu.device.create_shader_module(desc),
+        "off" => runtime = wgpu::ShaderRuntimeChecks::unchecked(),
+        "no-bounds" => runtime.bounds_checks = false,
+        "no-loop-bound" => runtime.force_loop_bounding = false,
+        other => panic!("--checks: on, off, no-bounds or no-loop-bound, not {other}"),
+    }
+    // SAFETY: the generated code indexes its arrays and the buffers only within their
+    // lengths and its loops are bounded (both checked by the conformance tests), which is
+    // what dropping the checks asks of the caller.
+    unsafe { gpu.device.create_shader_module_trusted(desc, runtime) }
+}
+
+/// `f()` with wgpu's validation and out-of-memory errors caught: they end the run, named.
+fn caught<T>(gpu: &Gpu, what: &str, f: impl FnOnce() -> T) -> T {
+    let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let out = f();
+    let errors = [validation, memory].map(|scope| pollster::block_on(scope.pop()));
+    if let Some(e) = errors.into_iter().flatten().next() {
+        panic!("{what}: {e}");
+    }
+    out
 }
 
 /// `count` upper-hemisphere `wi` and uniform `u` as the test kernels' inputs (mode 0).
@@ -128,15 +173,50 @@ fn pdf_inputs(samples: &[[f32; 4]], outputs: &[[f32; 4]]) -> Vec<[f32; 4]> {
     out
 }
 
-/// The fastest of `repeats` dispatches of `pipeline` over `inputs` (weights `params`),
-/// submission to completion.
+/// One entry point's times over `repeats` dispatches: submission to completion on the host,
+/// and (where the adapter has timestamp queries) the compute pass alone on the GPU.
+struct Times {
+    host: Vec<Duration>,
+    gpu: Vec<Duration>,
+}
+
+/// The median of `d` (upper middle; zero when empty).
+fn median(d: &[Duration]) -> Duration {
+    let mut v = d.to_vec();
+    v.sort();
+    v.get(v.len() / 2).copied().unwrap_or_default()
+}
+
+/// The pass's GPU time from its two resolved timestamps (`period` ns per tick).
+fn read_timestamps(gpu: &Gpu, readback: &wgpu::Buffer, period: f32) -> Duration {
+    readback.map_async(wgpu::MapMode::Read, .., |r| r.expect("map timestamps"));
+    gpu.device
+        .poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        })
+        .expect("poll");
+    let ticks: Vec<u64> = {
+        let view = readback.get_mapped_range(..).expect("mapped timestamps");
+        view.chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes")))
+            .collect()
+    };
+    readback.unmap();
+    let ns = ticks[1].saturating_sub(ticks[0]) as f64 * f64::from(period);
+    Duration::from_nanos(ns as u64)
+}
+
+/// `repeats` dispatches of `pipeline` over `inputs` (weights `params`), each timed on its
+/// own, after one dispatch that is not timed.
 fn time(
     gpu: &Gpu,
     pipeline: &wgpu::ComputePipeline,
     params: &[f32],
     inputs: &[[f32; 4]],
     repeats: usize,
-) -> Duration {
+    workgroup: usize,
+) -> Times {
     let d = &gpu.device;
     let bytes: Vec<u8> = inputs
         .iter()
@@ -176,15 +256,53 @@ fn time(
             },
         ],
     });
+    let stamps = d.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+    let queries = stamps.then(|| {
+        let set = d.create_query_set(&wgpu::QuerySetDescriptor {
+            label: None,
+            ty: wgpu::QueryType::Timestamp,
+            count: 2,
+        });
+        let buffer = |usage| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: None,
+                size: 16,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let resolve = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+        let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+        (set, resolve, readback)
+    });
+    let period = gpu.queue.get_timestamp_period();
     let items = inputs.len() / 2;
-    let mut best = Duration::MAX;
-    for _ in 0..repeats.max(1) {
+    let mut times = Times {
+        host: Vec::new(),
+        gpu: Vec::new(),
+    };
+    for round in 0..=repeats.max(1) {
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+            let timestamp_writes =
+                queries
+                    .as_ref()
+                    .map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    });
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes,
+            });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(items.div_ceil(64) as u32, 1, 1);
+            pass.dispatch_workgroups(items.div_ceil(workgroup) as u32, 1, 1);
+        }
+        if let Some((set, resolve, readback)) = &queries {
+            enc.resolve_query_set(set, 0..2, resolve, 0);
+            enc.copy_buffer_to_buffer(resolve, 0, readback, 0, 16);
         }
         let start = Instant::now();
         gpu.queue.submit([enc.finish()]);
@@ -193,9 +311,17 @@ fn time(
             timeout: None,
         })
         .expect("poll");
-        best = best.min(start.elapsed());
+        let host = start.elapsed();
+        let on_gpu = queries
+            .as_ref()
+            .map(|(_, _, readback)| read_timestamps(gpu, readback, period));
+        // The first round warms caches and clocks; it is not counted.
+        if round > 0 {
+            times.host.push(host);
+            times.gpu.extend(on_gpu);
+        }
     }
-    best
+    times
 }
 
 fn main() {
@@ -203,20 +329,24 @@ fn main() {
     let adapter = adapter(a.adapter.as_deref());
     let info = adapter.get_info();
     let f16 = adapter.features().contains(wgpu::Features::SHADER_F16);
-    let features = if f16 {
-        wgpu::Features::SHADER_F16
-    } else {
-        wgpu::Features::empty()
-    };
-    let gpu = Gpu::on(&adapter, features);
+    let wanted = wgpu::Features::SHADER_F16 | wgpu::Features::TIMESTAMP_QUERY;
+    let gpu = Gpu::on(&adapter, adapter.features() & wanted);
+    gpu.device.set_device_lost_callback(|reason, message| {
+        eprintln!("device lost ({reason:?}): {message}");
+    });
+    let stamps = gpu
+        .device
+        .features()
+        .contains(wgpu::Features::TIMESTAMP_QUERY);
     println!(
-        "adapter: {} ({:?}, {:?}, driver {} {}); {} items per dispatch, best of {}",
+        "adapter: {} ({:?}, {:?}, driver {} {}); {} items per dispatch in workgroups of {}, {} timed dispatches each",
         info.name,
         info.device_type,
         info.backend,
         info.driver,
         info.driver_info,
         a.count,
+        a.workgroup,
         a.repeats
     );
     if !matches!(
@@ -225,79 +355,114 @@ fn main() {
     ) {
         println!("(not a hardware GPU: these figures say nothing about one)");
     }
+    if stamps {
+        println!(
+            "GPU: the compute pass between its two timestamps; host: submission to completion"
+        );
+    } else {
+        println!("(no timestamp queries on this adapter: host times only)");
+    }
     println!();
-    println!("| model | arithmetic | entry point | ms per dispatch | M items/s |");
-    println!("|---|---|---|---:|---:|");
+    println!(
+        "| model | weights | checks | arithmetic | entry point | GPU ms best / median | host ms best / median | M items/s |"
+    );
+    println!("|---|---|---|---|---|---:|---:|---:|");
     let models = [
         ("disk", "conductor-ggx-a0.3-cu-disk"),
         ("sphere", "conductor-ggx-a0.3-cu-sphere"),
     ];
     let samples = sample_inputs(a.count);
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
     for (label, file) in models
         .iter()
         .filter(|(l, _)| a.models.iter().any(|m| m == l))
     {
         let path = format!("{}/../models/{file}.dbsdf", env!("CARGO_MANIFEST_DIR"));
         let blob = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-        let params = if a.baked {
-            Vec::new()
-        } else {
-            ModelDesc::from_blob(&blob).expect("blob").params
-        };
-        for float in [Float::F32, Float::F16] {
-            let name = if float == Float::F32 { "f32" } else { "f16" };
-            if !a.floats.iter().any(|f| f == name) {
-                continue;
-            }
-            if float == Float::F16 && !f16 {
-                println!("| {label} | f16 | (adapter has no shader f16) | | |");
-                continue;
-            }
-            let pipeline = |e: EntryPoints| {
-                let options = Options {
-                    language: Language::Wgsl,
-                    float,
-                    entry_points: e,
-                    weights: if a.baked {
-                        Weights::Baked
-                    } else {
-                        Weights::Buffer { set: 0, binding: 0 }
-                    },
-                    prefix: Some("dbsdf".into()),
-                };
-                let code = generate(&blob, &options).expect("generate");
-                // The material's offset in the buffer: 0 (it is the only one).
-                let start = std::time::Instant::now();
-                let p = gpu.pipeline(&gpu.wgsl(&wgsl_compute(&code, e, !a.baked, 0)));
-                eprintln!(
-                    "{label} {name} {e:?}: pipeline compiled in {:.1} s",
-                    start.elapsed().as_secs_f64()
-                );
-                p
+        for (weights, checks) in a
+            .weights
+            .iter()
+            .flat_map(|w| a.checks.iter().map(move |c| (w, c)))
+        {
+            let baked = weights == "baked";
+            let params = if baked {
+                Vec::new()
+            } else {
+                ModelDesc::from_blob(&blob).expect("blob").params
             };
-            let sample = pipeline(EntryPoints {
-                direction: false,
-                sample: true,
-                pdf: false,
-            });
-            let pdf = pipeline(EntryPoints {
-                direction: false,
-                sample: false,
-                pdf: true,
-            });
-            let outputs = gpu.run(&sample, &params, &samples);
-            let valid = outputs.chunks_exact(2).filter(|r| r[1][3] > 0.0).count();
-            let pdf_in = pdf_inputs(&samples, &outputs);
-            for (entry, p, inputs) in [
-                ("sample (direction + PDF)", &sample, &samples),
-                ("pdf", &pdf, &pdf_in),
-            ] {
-                let t = time(&gpu, p, &params, inputs, a.repeats);
-                let ms = t.as_secs_f64() * 1e3;
-                let rate = a.count as f64 / t.as_secs_f64() / 1e6;
-                println!("| {label} | {name} | {entry} | {ms:.2} | {rate:.3} |");
+            for float in [Float::F32, Float::F16] {
+                let name = if float == Float::F32 { "f32" } else { "f16" };
+                if !a.floats.iter().any(|f| f == name) {
+                    continue;
+                }
+                if float == Float::F16 && !f16 {
+                    println!(
+                        "| {label} | {weights} | {checks} | f16 | (adapter has no shader f16) | | | |"
+                    );
+                    continue;
+                }
+                let pipeline = |e: EntryPoints| {
+                    let options = Options {
+                        language: Language::Wgsl,
+                        float,
+                        entry_points: e,
+                        weights: if baked {
+                            Weights::Baked
+                        } else {
+                            Weights::Buffer { set: 0, binding: 0 }
+                        },
+                        prefix: Some("dbsdf".into()),
+                    };
+                    let code = generate(&blob, &options).expect("generate");
+                    // The material's offset in the buffer: 0 (it is the only one).
+                    let start = std::time::Instant::now();
+                    let what = format!("{label} {weights} checks {checks} {name} {e:?}");
+                    let source = wgsl_compute(&code, e, !baked, 0).replace(
+                        "@workgroup_size(64)",
+                        &format!("@workgroup_size({})", a.workgroup),
+                    );
+                    let p = caught(&gpu, &what, || gpu.pipeline(&module(&gpu, &source, checks)));
+                    eprintln!(
+                        "{what}: pipeline compiled in {:.1} s",
+                        start.elapsed().as_secs_f64()
+                    );
+                    p
+                };
+                let [direction, sample, pdf] = EntryPoints::EACH_ALONE.map(pipeline);
+                let outputs = caught(&gpu, "first sample run", || {
+                    gpu.run(&sample, &params, &samples)
+                });
+                let valid = outputs.chunks_exact(2).filter(|r| r[1][3] > 0.0).count();
+                let pdf_in = pdf_inputs(&samples, &outputs);
+                for (entry, p, inputs) in [
+                    ("direction", &direction, &samples),
+                    ("sample (direction + PDF)", &sample, &samples),
+                    ("pdf", &pdf, &pdf_in),
+                ] {
+                    let t = time(&gpu, p, &params, inputs, a.repeats, a.workgroup);
+                    let (host_best, host_median) = (
+                        t.host.iter().min().copied().unwrap_or_default(),
+                        median(&t.host),
+                    );
+                    let gpu_ms = if stamps {
+                        let best = t.gpu.iter().min().copied().unwrap_or_default();
+                        format!("{:.3} / {:.3}", ms(best), ms(median(&t.gpu)))
+                    } else {
+                        "-".into()
+                    };
+                    let per = if stamps { median(&t.gpu) } else { host_median };
+                    let rate = a.count as f64 / per.as_secs_f64() / 1e6;
+                    println!(
+                        "| {label} | {weights} | {checks} | {name} | {entry} | {gpu_ms} | {:.3} / {:.3} | {rate:.2} |",
+                        ms(host_best),
+                        ms(host_median)
+                    );
+                }
+                eprintln!(
+                    "{label} {weights} checks {checks} {name}: {valid} of {} samples valid",
+                    a.count
+                );
             }
-            eprintln!("{label} {name}: {valid} of {} samples valid", a.count);
         }
     }
 }

@@ -154,6 +154,7 @@ fn generated_c_matches_kernel() {
                     );
                 }
                 println!("{} buffer={buffer} steps {steps}: {e:?}", model.name);
+                e.assert_allowances(&format!("{} buffer={buffer} steps {steps}", model.name));
                 if steps > diffbsdf::spec::MAX_STEPS {
                     // Every call above the bound is invalid in both (checked above).
                     assert_eq!(e.valid, 0, "{}: a sample above MAX_STEPS", model.name);

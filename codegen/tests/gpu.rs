@@ -1,6 +1,8 @@
 //! The generated GLSL (glslang -> SPIR-V -> spirv-val -> naga -> wgpu) and WGSL
 //! (naga inside wgpu) run as compute shaders on lavapipe and agree with the Rust kernel:
 //! within 1e-5 in f32, within the documented bound in f16 (docs/codegen.md).
+//! `DIFFBSDF_GPU_ADAPTER=NVIDIA` (any part of an adapter's name) runs the same tests on a
+//! hardware driver instead.
 
 mod support;
 
@@ -17,6 +19,12 @@ use support::vectors::*;
 const F16_DIR: f32 = 4e-2;
 const F16_PDF: f32 = 5e-2;
 const F16_FLIPS: f32 = 0.02;
+/// f32 with `u` at an end of [0, 1] ([`u_at_edge`]: the base distribution's extreme
+/// tails, where the quantile's `log` and `sqrt` decide the sample): each vector's allowance
+/// times this. Vulkan lets a driver's built-ins be a few ulp off (`log`: 3 ulp, or 2^-21
+/// absolute near 1); lavapipe's are close to exact, NVIDIA's (H200, driver 580) put 204 of
+/// 52 956 such comparisons past the plain allowance, the worst 4.1x (docs/codegen.md).
+const EDGE_F32: f32 = 8.0;
 
 use support::vectors::TestModel;
 
@@ -76,7 +84,8 @@ fn compare(
             &mut interior
         };
         let (a, b) = (out[2 * i], out[2 * i + 1]);
-        let tol_dir = tol_dir * kernel.amplification(wi, u, steps);
+        let slack = if !half && u_at_edge(u) { EDGE_F32 } else { 1.0 };
+        let tol_dir = slack * tol_dir * kernel.amplification(wi, u, steps);
         if ep.direction {
             let d = kernel.direction(wi, u, steps);
             if half && d.is_some() != (a[..3] != [0.0; 3]) {
@@ -98,7 +107,14 @@ fn compare(
                         .max(kernel.pdf_condition(wi, s.0, steps))
                 });
                 let amp = kernel.amplification(wi, u, steps);
-                check_pdf(&what, b[3], s.map_or(0.0, |s| s.1), mc, tol_pdf * amp, e);
+                check_pdf(
+                    &what,
+                    b[3],
+                    s.map_or(0.0, |s| s.1),
+                    mc,
+                    slack * tol_pdf * amp,
+                    e,
+                );
             }
         }
     }
@@ -242,8 +258,9 @@ fn run_language(language: Language, float: Float) {
         }
     }
     let (interior, edge) = (total.interior, total.edge);
-    println!("{language:?} {float:?} on lavapipe vs kernel, u inside (0, 1): {interior:?}");
-    println!("{language:?} {float:?} on lavapipe vs kernel, u at an end of [0, 1]: {edge:?}");
+    let device = &gpu.name;
+    println!("{language:?} {float:?} on {device} vs kernel, u inside (0, 1): {interior:?}");
+    println!("{language:?} {float:?} on {device} vs kernel, u at an end of [0, 1]: {edge:?}");
     let label = format!("{language:?} {float:?}");
     match float {
         // f16: the raw bounds with `u` inside (0, 1); at its ends the direction's, and
@@ -253,7 +270,7 @@ fn run_language(language: Language, float: Float) {
             edge.assert_raw_bounds(&format!("{label} (u at an end)"), RAW_DIR_F16_EDGE, None);
         }
         _ => {
-            let mut all = interior;
+            let mut all = interior.clone();
             all.merge(&edge);
             all.assert_raw_bounds(&label, RAW_DIR_F32, Some(RAW_PDF_F32));
         }

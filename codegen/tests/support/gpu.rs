@@ -22,20 +22,25 @@ pub struct Gpu {
     layout_rw: wgpu::PipelineLayout,
 }
 
-/// The lavapipe device with f16; fails (never skips) when there is none, saying what to
-/// install.
+/// Names the Vulkan adapter the conformance tests run on instead of lavapipe (a part of its
+/// name, e.g. `NVIDIA`): the same tests, bounds and vectors on a hardware driver.
+pub const ADAPTER_VAR: &str = "DIFFBSDF_GPU_ADAPTER";
+
+/// The lavapipe device with f16 (or the adapter [`ADAPTER_VAR`] names); fails (never
+/// skips) when there is none, saying what to install.
 pub fn lavapipe() -> Gpu {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = wgpu::Backends::VULKAN;
     let instance = wgpu::Instance::new(desc);
     let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
     let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+    let wanted = std::env::var(ADAPTER_VAR).unwrap_or_else(|_| "llvmpipe".into());
     let adapter = adapters
         .into_iter()
-        .find(|a| a.get_info().name.contains("llvmpipe"))
+        .find(|a| a.get_info().name.contains(&wanted))
         .unwrap_or_else(|| {
             panic!(
-                "no lavapipe Vulkan adapter (found {names:?}): install the driver and loader with `{LAVAPIPE_HINT}`"
+                "no Vulkan adapter named *{wanted}* (found {names:?}): for lavapipe install the driver and loader with `{LAVAPIPE_HINT}`"
             )
         });
     let name = adapter.get_info().name;

@@ -439,8 +439,10 @@ pub fn pdf_vectors(kernel: &Kernel, samples: &[([f32; 3], [f32; 2])]) -> Vec<([f
     v
 }
 
-/// Largest error seen by a comparison, for reporting.
-#[derive(Default, Debug, Clone, Copy)]
+/// Largest error seen by a comparison, and every vector past its own allowance. The
+/// comparisons record; [`Errors::assert_allowances`] (also called by
+/// [`Errors::assert_raw_bounds`]) fails on them, after a whole run has been reported.
+#[derive(Default, Debug, Clone)]
 pub struct Errors {
     pub max_dir: f32,
     /// Largest PDF error relative to the PDF, divided by its allowance's scale
@@ -451,6 +453,11 @@ pub struct Errors {
     pub compared: usize,
     /// Comparisons where the kernel's answer was a valid sample or a positive PDF.
     pub valid: usize,
+    /// Comparisons past their allowance (or whose validity differs from the kernel's).
+    pub over: usize,
+    /// The largest error over its allowance (infinite for a validity difference), and the
+    /// vector it was seen on.
+    pub worst: Option<(f32, String)>,
 }
 
 /// Bounds on the raw errors over a whole conformance run (every model, step count and
@@ -462,21 +469,42 @@ pub const RAW_DIR_F32: f32 = 2e-3;
 /// See [`RAW_DIR_F32`].
 pub const RAW_PDF_F32: f32 = 2e-2;
 /// f16 networks (about 3 decimal digits), on every vector whose `u` is inside (0, 1) (not
-/// [`u_at_edge`]): a direction within 0.1 of the kernel's, a PDF within a factor 3
-/// (measured 0.065 and 1.94, both on the iridescent paint's sphere model, whose map
-/// compresses more than 300x at grazing `wi`; docs/codegen.md).
+/// [`u_at_edge`]): a direction within 0.1 of the kernel's, a PDF within a factor 4
+/// (measured 0.065 and 1.94 on lavapipe, 0.075 and 2.49 on an NVIDIA H200, all on the
+/// iridescent paint's sphere model, whose map compresses more than 300x at grazing `wi`;
+/// docs/codegen.md).
 pub const RAW_DIR_F16: f32 = 0.1;
 /// See [`RAW_DIR_F16`].
-pub const RAW_PDF_F16: f32 = 2.0;
+pub const RAW_PDF_F16: f32 = 3.0;
 /// f16 networks at the ends of [0, 1] ([`u_at_edge`]: the base distribution's extreme
-/// tails): a direction within 1 of the kernel's (measured 0.69); the PDF there is held to
+/// tails): a direction within 1 of the kernel's (measured 0.69 on lavapipe, 0.66 on an NVIDIA H200); the PDF there is held to
 /// each vector's own allowance only (its raw error is reported: docs/codegen.md).
 pub const RAW_DIR_F16_EDGE: f32 = 1.0;
 
 impl Errors {
+    /// Records a comparison past its allowance (`ratio` = error / allowance).
+    fn record_over(&mut self, ratio: f32, message: String) {
+        self.over += 1;
+        if self.worst.as_ref().is_none_or(|(r, _)| ratio > *r) {
+            self.worst = Some((ratio, message));
+        }
+    }
+
+    /// Asserts that every comparison was within its own allowance.
+    pub fn assert_allowances(&self, label: &str) {
+        if let Some((ratio, message)) = &self.worst {
+            panic!(
+                "{label}: {} of {} comparisons past their allowance; the worst ({ratio:.3}x): {message}",
+                self.over, self.compared
+            );
+        }
+    }
+
     /// Asserts bounds on the raw errors of a whole run: the largest direction error and the
-    /// largest raw relative PDF error (`None`: reported, not bounded).
+    /// largest raw relative PDF error (`None`: reported, not bounded); and, first, that
+    /// every comparison was within its own allowance.
     pub fn assert_raw_bounds(&self, label: &str, dir: f32, pdf: Option<f32>) {
+        self.assert_allowances(label);
         assert!(
             self.max_dir <= dir,
             "{label}: largest direction error {:e} > {dir:e}",
@@ -498,6 +526,10 @@ impl Errors {
         self.max_pdf_raw = self.max_pdf_raw.max(e.max_pdf_raw);
         self.compared += e.compared;
         self.valid += e.valid;
+        if let Some((ratio, message)) = &e.worst {
+            self.record_over(*ratio, message.clone());
+            self.over += e.over - 1;
+        }
     }
 }
 
@@ -505,15 +537,25 @@ impl Errors {
 pub fn check_dir(what: &str, got: [f32; 3], want: Option<[f32; 3]>, tol: f32, e: &mut Errors) {
     e.compared += 1;
     match want {
-        None => assert!(got == [0.0; 3], "{what}: kernel says invalid, got {got:?}"),
+        None if got != [0.0; 3] => e.record_over(
+            f32::INFINITY,
+            format!("{what}: kernel says invalid, got {got:?}"),
+        ),
+        None => {}
         Some(w) => {
             e.valid += 1;
             let d = (0..3).map(|i| (got[i] - w[i]).abs()).fold(0.0f32, f32::max);
             e.max_dir = e.max_dir.max(d);
-            assert!(
-                d <= tol,
-                "{what}: direction {got:?} vs kernel {w:?}: error {d:e} > allowed {tol:e}"
-            );
+            // NaN is past any allowance.
+            let within = d <= tol;
+            if !within {
+                e.record_over(
+                    d / tol,
+                    format!(
+                        "{what}: direction {got:?} vs kernel {w:?}: error {d:e} > allowed {tol:e}"
+                    ),
+                );
+            }
         }
     }
 }
@@ -529,16 +571,15 @@ pub fn check_dir(what: &str, got: [f32; 3], want: Option<[f32; 3]>, tol: f32, e:
 pub fn check_pdf(what: &str, got: f32, want: f32, measure: f32, tol: f32, e: &mut Errors) {
     e.compared += 1;
     if want == 0.0 {
-        assert!(got == 0.0, "{what}: kernel PDF 0, got {got:e}");
+        if got != 0.0 {
+            e.record_over(f32::INFINITY, format!("{what}: kernel PDF 0, got {got:e}"));
+        }
         return;
     }
-    if want < f32::MIN_POSITIVE {
+    if want < f32::MIN_POSITIVE && (0.0..f32::MIN_POSITIVE).contains(&got) {
         // A subnormal density: GPUs may flush it to zero (Vulkan allows it), and it is
-        // zero for every practical purpose. Both must still be below the normal range.
-        assert!(
-            (0.0..f32::MIN_POSITIVE).contains(&got),
-            "{what}: kernel PDF {want:e} (subnormal), got {got:e}"
-        );
+        // zero for every practical purpose. Where only one side is subnormal the two are
+        // compared as any other PDFs (an f16 network's answer may round across the edge).
         return;
     }
     e.valid += 1;
@@ -547,10 +588,15 @@ pub fn check_pdf(what: &str, got: f32, want: f32, measure: f32, tol: f32, e: &mu
     e.max_pdf_rel = e.max_pdf_rel.max(r / scale);
     e.max_pdf_raw = e.max_pdf_raw.max(r);
     let tol = tol * scale;
-    assert!(
-        r <= tol,
-        "{what}: PDF {got:e} vs kernel {want:e}: relative error {r:e} > allowed {tol:e}"
-    );
+    let within = r <= tol;
+    if !within {
+        e.record_over(
+            r / tol,
+            format!(
+                "{what}: PDF {got:e} vs kernel {want:e}: relative error {r:e} > allowed {tol:e}"
+            ),
+        );
+    }
 }
 
 /// `|d ln(pdf_w / pdf_x) / d theta|` at `wo` for incident `wi`: `|cot theta|` on the
