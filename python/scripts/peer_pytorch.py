@@ -99,6 +99,7 @@ ERFINV_TAIL = [
 NEWTON_MAX_ITERS = 32
 LINE_SEARCH_HALVINGS = 8
 NEWTON_TOL = 1e-6
+DET_REUSE_TOL = 1e-7
 
 DISK, SPHERE, EQUATORIAL = 0, 1, 2
 DOMAIN_NAMES = {DISK: "disk", SPHERE: "sphere", EQUATORIAL: "equatorial"}
@@ -552,7 +553,8 @@ class TorchFlow:
             if small.any():  # converged: take the update, det at the returned point
                 xc = self.advance(x[small], -d[small])
                 dc, vc = det[small].clone(), v[small].clone()
-                moved = (xc != x[small]).any(dim=1)  # where the update rounds away, R(x) holds
+                # where the update is about one rounding of x, R(x) stands for R(xc)
+                moved = size[small] > DET_REUSE_TOL * scale[small]
                 if moved.any():
                     _, _, dc[moved], vc[moved] = self.residual(
                         xc[moved], y[small][moved], cond_t[small][moved], h)

@@ -9,7 +9,7 @@
 use super::{step_det, step_time, Conditioned};
 use crate::math::ln;
 use crate::model::Model;
-use crate::spec::{LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL};
+use crate::spec::{DET_REUSE_TOL, LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL};
 
 impl<
         const BE: usize,
@@ -115,11 +115,11 @@ impl<
             if size <= NEWTON_TOL * scale {
                 // Converged: the last update is below the f32 noise of `x + h v(x)`. The
                 // determinant is taken at the returned point, as the forward pass takes it
-                // at x_k: where the flow compresses (det << 1) the one at the previous
-                // iterate differs by far more than rounding. Where the update rounds away
-                // (`x - d == x`), the evaluation at `x` is already that one.
+                // at x_k: where the flow compresses (det << 1) the one at an iterate farther
+                // away differs by more than rounding. Where the update is about one rounding
+                // of `x` (DET_REUSE_TOL), the evaluation at `x` stands for it.
                 let next = domain.advance(x, [-d[0], -d[1]]);
-                let fin = if next == x {
+                let fin = if size <= DET_REUSE_TOL * scale {
                     at
                 } else {
                     self.residual(step, next, y, h)

@@ -3,7 +3,9 @@
 
 use super::Emitter;
 use crate::dialect::{Math, T};
-use diffbsdf::spec::{LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16};
+use diffbsdf::spec::{
+    DET_REUSE_TOL, LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16,
+};
 
 impl Emitter<'_> {
     /// Newton's tolerance: the kernel's, or the f16 one.
@@ -192,9 +194,10 @@ impl Emitter<'_> {
         self.code.line(
             "// returned point, where the forward pass takes it (at x itself where the update",
         );
-        self.code.line("// rounds away).");
+        self.code.line("// is about one rounding of x).");
         self.step_to("x.a", "x.b", "");
-        self.code.open("if (x.a != a || x.b != b) {");
+        let reuse = self.f(DET_REUSE_TOL);
+        self.code.open(format!("if (size > {reuse} * scale) {{"));
         self.code.line("pa = x.a;");
         self.code.line("pb = x.b;");
         self.code.line(format!("mode = {};", self.u(2)));

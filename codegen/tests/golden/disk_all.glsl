@@ -558,10 +558,10 @@ diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_disk_Cond cond, 
         if (size <= 1e-6 * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it (at x itself where the update
-            // rounds away).
+            // is about one rounding of x).
             x.a = a - d0;
             x.b = b - d1;
-            if (x.a != a || x.b != b) {
+            if (size > 1e-7 * scale) {
                 pa = x.a;
                 pb = x.b;
                 mode = 2u;

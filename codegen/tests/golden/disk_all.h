@@ -572,10 +572,10 @@ static inline diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_di
         if (size <= 1e-6f * scale) {
             /* Converged: the update is below the f32 noise of x + h v(x); det is taken at the */
             /* returned point, where the forward pass takes it (at x itself where the update */
-            /* rounds away). */
+            /* is about one rounding of x). */
             x.a = a - d0;
             x.b = b - d1;
-            if (x.a != a || x.b != b) {
+            if (size > 1e-7f * scale) {
                 pa = x.a;
                 pb = x.b;
                 mode = 2u;

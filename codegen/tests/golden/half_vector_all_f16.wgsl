@@ -593,10 +593,10 @@ fn diffbsdf_tiny_half_vector_newton(cond: diffbsdf_tiny_half_vector_Cond, t: f32
         if (size <= 0.002f * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it (at x itself where the update
-            // rounds away).
+            // is about one rounding of x).
             x.a = a - d0;
             x.b = b - d1;
-            if (x.a != a || x.b != b) {
+            if (size > 1e-7f * scale) {
                 pa = x.a;
                 pb = x.b;
                 mode = 2u;

@@ -527,10 +527,10 @@ diffbsdf_tiny_sphere_Root diffbsdf_tiny_sphere_newton(uint base, diffbsdf_tiny_s
         if (size <= 0.002 * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it (at x itself where the update
-            // rounds away).
+            // is about one rounding of x).
             x.a = a - d0;
             x.b = diffbsdf_tiny_sphere_wrap(b - d1);
-            if (x.a != a || x.b != b) {
+            if (size > 1e-7 * scale) {
                 pa = x.a;
                 pb = x.b;
                 mode = 2u;
