@@ -164,7 +164,7 @@ pub const NEWTON_TOL: f32 = 1e-6;
 /// Where Newton's last update is at most `DET_REUSE_TOL * (1 + |x|)` (max norm), about one
 /// f32 rounding of `x`, the returned point's determinant and velocity are the ones at the
 /// iterate it was updated from, not evaluated again: one Jacobian evaluation fewer per step
-/// on most steps (`pdf()` 1.2-1.5x faster), PDFs as close to the forward pass's as before
+/// on most steps (`pdf()` 1.2-1.4x faster), PDFs as close to the forward pass's as before
 /// (docs/math.md, "Determinant at the returned point").
 pub const DET_REUSE_TOL: f32 = 1e-7;
 /// Newton tolerance of the generated f16 inverse: an f16 velocity is a step function of
