@@ -276,6 +276,10 @@ pub struct ModelDef {
     /// `z = (x - mu(wi)) / sigma(wi)` and its end point is mapped to the chart by `x = mu +
     /// sigma z` (docs/math.md, §6.3; blob flag bit 2). Disk and half-vector chart only.
     pub standardized: bool,
+    /// With [`ModelDef::standardized`]: the flow runs in the compressed standard
+    /// coordinates `y = K asinh(z / K)` ([`crate::spec::STANDARD_WARP_K`]; docs/math.md,
+    /// §6.4; blob flag bit 3). A header error without `standardized`.
+    pub standard_warp: bool,
     /// A short label (codegen names things after it).
     pub name: ModelName,
 }
@@ -303,6 +307,7 @@ impl ModelDef {
             isotropic: false,
             incident: IncidentRange::UpperHemisphere,
             standardized: false,
+            standard_warp: false,
             name: ModelName::EMPTY,
         }
     }

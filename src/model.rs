@@ -50,6 +50,7 @@ impl<
             && def.velocity.hidden_layers as usize == VM + 1
             && BE <= VE
             && !(def.standardized && def.domain.is_spherical())
+            && (def.standardized || !def.standard_warp)
     }
 
     /// Loads and validates a blob.

@@ -114,6 +114,8 @@ impl<
         let c = self.condition(wi);
         let x0 = self.flow_start(&c, u);
         let (x, ln_det) = self.flow_with_ln_det(&c, x0, steps)?;
+        // The warp's end term joins the steps' sum (docs/math.md, (66)).
+        let ln_det = ln_det + self.end_ln_expansion(x);
         let x = self.chart_point(&c, x);
         let wo = self.def.domain.to_direction(x, wi)?;
         // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (docs/math.md, (38))
@@ -140,7 +142,9 @@ impl<
         let wo = frame.to_local(wo);
         let y = domain.point_of(wo, wi)?;
         let c = self.condition(wi);
-        let (x0, ln_det) = self.flow_inverse(&c, self.flow_point(&c, y), steps)?;
+        let end = self.flow_point(&c, y);
+        let (x0, ln_det) = self.flow_inverse(&c, end, steps)?;
+        let ln_det = ln_det + self.end_ln_expansion(end);
         let ln_pdf = self.start_ln_pdf(&c, x0) - ln_det + domain.ln_measure(y, wo, wi);
         let pdf = exp(ln_pdf);
         pdf.is_finite().then_some(pdf)

@@ -111,6 +111,12 @@ pub const LN_SCALE_MAX: f32 = core::f32::consts::LN_10;
 /// than this to 0 or 1 maps to `|z| = 7.1`.
 pub const GAUSSIAN_TAIL_MIN: f32 = 9.094_947e-13;
 
+/// `K` of the compressive warp of the standard coordinates, `y = K asinh(z / K)`
+/// (docs/math.md, §6.4; `ModelDef::standard_warp`): the identity for `|z| << K`,
+/// logarithmic beyond. Measured on the RGL files with K = 3 (docs/measured-materials.md,
+/// "A compressive warp of the standard coordinates").
+pub const STANDARD_WARP_K: f32 = 3.0;
+
 /// `ln(1/sqrt(2 pi))`, the normal log-density's constant.
 pub const LN_INV_SQRT_2PI: f32 = -0.918_938_5;
 

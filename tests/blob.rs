@@ -6,7 +6,9 @@ mod support;
 use diffbsdf::internals::blob::{blob_len, crc32, write_blob, Blob, CHECKSUM_LEN, HEADER_LEN};
 use diffbsdf::{BlobError, Model3x32, Model4x32, ModelName, Precision};
 use proptest::prelude::*;
-use support::{random_disk, random_sphere, random_standardized_half_vector};
+use support::{
+    random_disk, random_sphere, random_standardized_half_vector, random_warped_half_vector,
+};
 
 fn blob_of(m: &Model3x32, precision: Precision) -> Vec<u8> {
     let mut def = *m.def();
@@ -148,9 +150,20 @@ fn header_errors_behind_a_valid_checksum() {
     assert_eq!(steps(max), Ok(u32::from(max)));
     assert!(matches!(steps(max + 1), Err(BlobError::BadHeader(_))));
     assert!(matches!(steps(u16::MAX), Err(BlobError::BadHeader(_))));
-    // Flags: bit 0 (isotropic), bit 1 (upper hemisphere) and bit 2 (standard
-    // coordinates) are the only ones defined.
+    // Flags: bit 0 (isotropic), bit 1 (upper hemisphere), bit 2 (standard coordinates) and
+    // bit 3 (their warp, only with bit 2) are the only ones defined.
     assert!(matches!(case(28, 8), BlobError::BadHeader(_)));
+    assert!(matches!(case(28, 16), BlobError::BadHeader(_)));
+    assert_eq!(
+        Model3x32::from_blob(&{
+            let mut b = good.clone();
+            b[28] = 12;
+            reseal(&mut b);
+            b
+        })
+        .map(|m| (m.def().standardized, m.def().standard_warp)),
+        Ok((true, true))
+    );
     assert_eq!(
         Model3x32::from_blob(&{
             let mut b = good.clone();
@@ -187,6 +200,12 @@ fn standard_coordinates_flag_round_trips_and_is_refused_on_the_sphere() {
     let back = Model3x32::from_blob(&bytes).unwrap();
     assert_eq!(back.def(), m.def());
     assert_eq!(params_of(&back), params_of(&m));
+    let w = random_warped_half_vector(4, 2);
+    let bytes = blob_of(&w, Precision::F32);
+    assert_eq!(bytes[28] & 12, 12);
+    let back = Model3x32::from_blob(&bytes).unwrap();
+    assert_eq!(back.def(), w.def());
+    assert_eq!(params_of(&back), params_of(&w));
 }
 
 #[test]

@@ -7,7 +7,7 @@ use diffbsdf::glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 use support::{
     direction, random_disk, random_isotropic_equatorial, random_isotropic_half_vector,
-    random_sphere, random_standardized_half_vector,
+    random_sphere, random_standardized_half_vector, random_warped_half_vector,
 };
 
 /// Allowed error of `integral + lost mass` against 1.
@@ -151,6 +151,17 @@ fn standardized_half_vector_pdf_integrates_to_one_minus_lost_mass() {
         "standardized half vector",
         random_standardized_half_vector,
         [(41, 4, 0.2, 0.1), (42, 2, 0.7, 0.5), (43, 8, 0.05, 0.8)],
+    );
+}
+
+/// The same in the compressed standard coordinates (docs/math.md, §6.4): the warp's
+/// Jacobian at both ends of the flow is accounted for exactly.
+#[test]
+fn warped_half_vector_pdf_integrates_to_one_minus_lost_mass() {
+    half_vector_totals(
+        "warped half vector",
+        random_warped_half_vector,
+        [(51, 4, 0.2, 0.1), (52, 2, 0.7, 0.5), (53, 8, 0.05, 0.8)],
     );
 }
 

@@ -9,7 +9,8 @@ use proptest::prelude::*;
 use support::{
     direction, random_disk, random_equatorial, random_half_vector, random_isotropic_disk,
     random_isotropic_equatorial, random_isotropic_half_vector, random_isotropic_sphere,
-    random_sphere, random_standardized_disk, random_standardized_half_vector, rel,
+    random_sphere, random_standardized_disk, random_standardized_half_vector,
+    random_warped_half_vector, rel,
 };
 
 /// Allowed relative difference between `pdf(wi, wo)` and the sampled PDF, or, where one
@@ -99,5 +100,10 @@ consistency!(
 consistency!(
     standardized_half_vector_pdf_of_sample_matches_sampled_pdf,
     random_standardized_half_vector,
+    true
+);
+consistency!(
+    warped_half_vector_pdf_of_sample_matches_sampled_pdf,
+    random_warped_half_vector,
     true
 );

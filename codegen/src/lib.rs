@@ -231,7 +231,11 @@ pub(crate) fn header_lines(model: &ModelDesc, options: &Options, prefix: &str) -
             "domain {domain}{}{}{}; base net {}x{} ({} freqs), velocity net {}x{} ({} freqs); {} default steps",
             if d.isotropic { ", isotropic (nets see wi turned to phi = 0)" } else { "" },
             if d.domain.is_spherical() && !d.accepts_incident_z(-1.0) { ", wi above the surface only" } else { "" },
-            if d.standardized { ", flow in the base's standard coordinates" } else { "" },
+            match (d.standardized, d.standard_warp) {
+                (true, true) => ", flow in the base's standard coordinates, compressed by K asinh(z / K)",
+                (true, false) => ", flow in the base's standard coordinates",
+                _ => "",
+            },
             d.base.hidden_layers, d.base.width, d.base.freqs, d.velocity.hidden_layers,
             d.velocity.width, d.velocity.freqs, d.default_steps
         ),

@@ -58,6 +58,7 @@ fn architecture(d: &ModelDef) -> impl PartialEq {
         d.isotropic,
         d.accepts_incident_z(-1.0),
         d.standardized,
+        d.standard_warp,
     )
 }
 

@@ -36,8 +36,9 @@ fn tiny(domain: Domain, name: &str) -> Vec<u8> {
         } else {
             diffbsdf::IncidentRange::UpperHemisphere
         },
-        // As `fit` makes it by default: the half-vector flow in standard coordinates.
+        // As `fit` makes it by default: the half-vector flow in warped standard coordinates.
         standardized: domain == Domain::HalfVector,
+        standard_warp: domain == Domain::HalfVector,
         name: ModelName::new(name).expect("name"),
     };
     random_blob(&def, 5, 1.0)

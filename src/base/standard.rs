@@ -15,6 +15,19 @@ impl BaseDist {
         [gaussian::quantile(u[0]), gaussian::quantile(u[1])]
     }
 
+    /// The flow's start point for `u` in standard coordinates: `z0` (59), compressed by
+    /// (63) when `warped` ([`crate::ModelDef::standard_warp`]).
+    #[inline]
+    #[must_use]
+    pub fn standard_start(u: [f32; 2], warped: bool) -> [f32; 2] {
+        let z0 = Self::standard_sample(u);
+        if warped {
+            super::warp::compress2(z0)
+        } else {
+            z0
+        }
+    }
+
     /// `ln p0` of the chart point `mu + sigma z0`, from `z0`:
     /// `((ln N(z0_0) + ln N(z0_1)) - ln sigma_0) - ln sigma_1` (docs/math.md, (60)).
     #[inline]

@@ -148,13 +148,20 @@ impl RawHeader {
         let domain = Domain::from_code(self.domain).ok_or(BlobError::UnknownDomain(self.domain))?;
         let activation = Activation::from_code(self.activation)
             .ok_or(BlobError::UnknownActivation(self.activation))?;
-        if self.flags & !(FLAG_ISOTROPIC | FLAG_UPPER_HEMISPHERE | FLAG_STANDARDIZED) != 0 {
+        let known = FLAG_ISOTROPIC | FLAG_UPPER_HEMISPHERE | FLAG_STANDARDIZED | FLAG_STANDARD_WARP;
+        if self.flags & !known != 0 {
             return Err(BlobError::BadHeader("unknown flag bits are set"));
         }
         let standardized = self.flags & FLAG_STANDARDIZED != 0;
         if standardized && domain.is_spherical() {
             return Err(BlobError::BadHeader(
                 "standard coordinates on a spherical domain",
+            ));
+        }
+        let standard_warp = self.flags & FLAG_STANDARD_WARP != 0;
+        if standard_warp && !standardized {
+            return Err(BlobError::BadHeader(
+                "warped standard coordinates without standard coordinates",
             ));
         }
         check_shape(self.base, "base net")?;
@@ -190,6 +197,7 @@ impl RawHeader {
                 IncidentRange::WholeSphere
             },
             standardized,
+            standard_warp,
             name,
         };
         let from_shape = def.param_count();
@@ -209,6 +217,9 @@ pub(crate) const FLAG_ISOTROPIC: u32 = 1;
 /// Header flag: the flow runs in the base distribution's standard coordinates
 /// ([`ModelDef::standardized`]; disk and half-vector chart only).
 pub(crate) const FLAG_STANDARDIZED: u32 = 4;
+/// Header flag: the flow runs in the compressed standard coordinates
+/// ([`ModelDef::standard_warp`]; only with [`FLAG_STANDARDIZED`]).
+pub(crate) const FLAG_STANDARD_WARP: u32 = 8;
 /// Header flag: the model is defined for `wi` above the surface only
 /// ([`IncidentRange::UpperHemisphere`]); implied on the disk, written there too.
 pub(crate) const FLAG_UPPER_HEMISPHERE: u32 = 2;

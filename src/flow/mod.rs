@@ -7,7 +7,7 @@
 mod forward;
 mod inverse;
 
-use crate::base::BaseDist;
+use crate::base::{warp, BaseDist};
 use crate::model::Model;
 use crate::net::encoding::{encode_wi, prefix};
 use glam::Vec3;
@@ -53,45 +53,64 @@ impl<
         }
     }
 
-    /// The flow's start point for `u`: `x0` (26) / (27), or `z0` (59) in standard
-    /// coordinates.
+    /// The flow's start point for `u`: `x0` (26) / (27), `z0` (59) in standard
+    /// coordinates, or its compression (63) in warped ones.
     #[inline(always)]
     pub(crate) fn flow_start(&self, c: &Conditioned<VW>, u: [f32; 2]) -> [f32; 2] {
         if self.def.standardized {
-            BaseDist::standard_sample(u)
+            BaseDist::standard_start(u, self.def.standard_warp)
         } else {
             c.base.sample(u)
         }
     }
 
-    /// `ln p0` of the chart point the start point `p0` stands for: (32) / (34), or (60).
+    /// `ln p0` of the start point `p0` in the flow's coordinates: (32) / (34), (60), or
+    /// (60) at `z0` = (64) of `p0` plus `ln |dz/dy|` (65) in warped coordinates (66).
     #[inline(always)]
     pub(crate) fn start_ln_pdf(&self, c: &Conditioned<VW>, p0: [f32; 2]) -> f32 {
-        if self.def.standardized {
-            c.base.standard_ln_pdf(p0)
-        } else {
+        if !self.def.standardized {
             c.base.ln_pdf(p0)
+        } else if self.def.standard_warp {
+            c.base.standard_ln_pdf(warp::expand2(p0)) + warp::ln_expansion2(p0)
+        } else {
+            c.base.standard_ln_pdf(p0)
         }
     }
 
-    /// The chart point of the flow's end point: itself, or (61) in standard coordinates.
+    /// `ln |det|` of the map from the flow's end point to standard coordinates:
+    /// (65) at the end point in warped coordinates, 0 otherwise (docs/math.md, (66)).
+    #[inline(always)]
+    pub(crate) fn end_ln_expansion(&self, p: [f32; 2]) -> f32 {
+        if self.def.standard_warp {
+            warp::ln_expansion2(p)
+        } else {
+            0.0
+        }
+    }
+
+    /// The chart point of the flow's end point: itself, (61) in standard coordinates,
+    /// (61) of (64) in warped ones.
     #[inline(always)]
     pub(crate) fn chart_point(&self, c: &Conditioned<VW>, p: [f32; 2]) -> [f32; 2] {
-        if self.def.standardized {
-            c.base.from_standard(p)
-        } else {
+        if !self.def.standardized {
             p
+        } else if self.def.standard_warp {
+            c.base.from_standard(warp::expand2(p))
+        } else {
+            c.base.from_standard(p)
         }
     }
 
-    /// The flow's end point for the chart point `y`: itself, or (62) in standard
-    /// coordinates.
+    /// The flow's end point for the chart point `y`: itself, (62) in standard
+    /// coordinates, (63) of (62) in warped ones.
     #[inline(always)]
     pub(crate) fn flow_point(&self, c: &Conditioned<VW>, y: [f32; 2]) -> [f32; 2] {
-        if self.def.standardized {
-            c.base.to_standard(y)
-        } else {
+        if !self.def.standardized {
             y
+        } else if self.def.standard_warp {
+            warp::compress2(c.base.to_standard(y))
+        } else {
+            c.base.to_standard(y)
         }
     }
 }

@@ -294,6 +294,17 @@ pub fn random_standardized_disk(seed: u64, min_steps: u32) -> Model3x32 {
     standardized(&random_disk(seed, min_steps))
 }
 
+/// [`random_standardized_half_vector`] with the flow in the compressed standard
+/// coordinates `K asinh(z / K)` (docs/math.md, §6.4).
+pub fn random_warped_half_vector(seed: u64, min_steps: u32) -> Model3x32 {
+    let m = standardized(&random_isotropic_half_vector(seed, min_steps));
+    let mut def = *m.def();
+    def.standard_warp = true;
+    let mut p = vec![0.0; def.param_count()];
+    m.params(&mut p).unwrap();
+    Model3x32::from_params(def, &p).unwrap()
+}
+
 fn standardized(m: &Model3x32) -> Model3x32 {
     let mut def = *m.def();
     def.standardized = true;

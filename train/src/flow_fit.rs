@@ -15,7 +15,7 @@ use crate::batch::loss_and_grad;
 use crate::dataset::TrainingSet;
 use crate::features::{interpolate, push_velocity_row};
 use crate::mlp::Mlp;
-use diffbsdf::internals::base::BaseDist;
+use crate::start::StartDist;
 use diffbsdf::{Domain, ModelDef};
 use rand::Rng;
 use rand_pcg::Pcg64;
@@ -50,8 +50,8 @@ pub struct FlowConfig {
 pub enum Coupling<'a> {
     /// `x1` from the data, `x0` drawn afresh from the base distribution of its `wi`.
     Independent {
-        /// One base distribution per training pair.
-        base: &'a [BaseDist],
+        /// One start distribution per training pair.
+        base: &'a [StartDist],
     },
     /// Fixed pairs: `pairs[k] = (index of wi in the data, x0, x1)`.
     Fixed {
@@ -67,7 +67,7 @@ enum Draw<'a> {
     /// Data row `i`, its base distribution and the uniform numbers of its `x0`.
     Independent {
         i: usize,
-        base: &'a BaseDist,
+        base: &'a StartDist,
         u: [f32; 2],
     },
     /// A fixed pair.
@@ -122,7 +122,7 @@ fn transport_coupling(
     }
     groups.into_par_iter().for_each(|g| {
         let n = g.len();
-        let rows: Vec<(usize, &BaseDist, [f32; 2])> = g
+        let rows: Vec<(usize, &StartDist, [f32; 2])> = g
             .iter()
             .filter_map(|(d, _)| match *d {
                 Draw::Independent { i, base, u } => Some((i, base, u)),
@@ -160,7 +160,7 @@ fn transport_coupling(
 /// of one `wi` spread over `[0, 1]`.
 fn draw_runs<'a>(
     data: &TrainingSet,
-    base: &'a [BaseDist],
+    base: &'a [StartDist],
     batch: usize,
     group: usize,
     time: &mut dyn FnMut(usize, &mut Pcg64) -> f32,
@@ -296,6 +296,7 @@ pub fn train_flow(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use diffbsdf::internals::base::BaseDist;
     use rand::SeedableRng;
 
     fn length2(draws: &[(Draw<'_>, f32)], data: &TrainingSet) -> f64 {
@@ -328,14 +329,16 @@ mod tests {
         }
         let data = TrainingSet::new(Domain::Sphere, 0, &pairs);
         assert_eq!(data.runs(), 128);
-        let base: Vec<BaseDist> = data
+        let base: Vec<StartDist> = data
             .wi
             .iter()
-            .map(|wi| BaseDist::Sphere {
-                mu_theta: wi[2].acos(),
-                ln_sigma: 0.2f32.ln(),
-                mu_phi: 0.0,
-                ln_gamma: 0.2f32.ln(),
+            .map(|wi| {
+                StartDist::Chart(BaseDist::Sphere {
+                    mu_theta: wi[2].acos(),
+                    ln_sigma: 0.2f32.ln(),
+                    mu_phi: 0.0,
+                    ln_gamma: 0.2f32.ln(),
+                })
             })
             .collect();
         let batch = 1024;

@@ -33,6 +33,7 @@ pub mod mlp;
 pub mod pipeline;
 pub mod progress;
 pub mod reflow;
+pub mod start;
 mod tiles;
 
 pub use error::TrainError;

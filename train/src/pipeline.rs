@@ -11,7 +11,8 @@ use crate::flow_fit::{train_flow, Coupling, FlowConfig};
 use crate::mlp::Mlp;
 use crate::progress::Progress;
 use crate::reflow::reflow_pairs;
-use diffbsdf::internals::base::BaseDist;
+use crate::start::StartDist;
+use diffbsdf::internals::base::{warp, BaseDist};
 use diffbsdf::spec::MAX_FREQS;
 use diffbsdf::{AnyModel, Domain, IncidentRange, ModelDef, ModelName, Net, NetShape};
 use diffbsdf_materials::Material;
@@ -73,11 +74,15 @@ impl FitConfig {
     /// the 2-core machine.
     ///
     /// On the half-vector chart the flow runs in the base's standard coordinates
-    /// (`ModelDef::standardized`, docs/math.md §6.3): measured on the RGL files, golden
-    /// yellow 2.29x -> 1.64x and orange 71.6x -> 42.7x the tabular sampler's mean RV.
+    /// (`ModelDef::standardized`, docs/math.md §6.3), compressed by `3 asinh(z / 3)`
+    /// (`ModelDef::standard_warp`, §6.4): measured on the RGL files, standard coordinates
+    /// took golden yellow 2.29x -> 1.64x and orange 71.6x -> 42.7x the tabular sampler's
+    /// mean RV, the warp golden yellow 1.64x -> 1.53x, orange -> 36.8x and `ilm_solo_m_68`
+    /// 15.6x -> 11.2x (docs/measured-materials.md).
     pub fn standard(domain: Domain, seed: u64) -> Self {
         let mut def = paper_def(domain);
         def.standardized = domain == Domain::HalfVector;
+        def.standard_warp = def.standardized;
         Self::for_def(def, seed)
     }
 
@@ -227,17 +232,19 @@ pub struct Fitted {
 }
 
 /// The training set with every target in the standard coordinates of its base
-/// distribution, and the standard normal as every pair's base.
-fn standardize(data: &TrainingSet, dists: &[BaseDist]) -> (TrainingSet, Vec<BaseDist>) {
+/// distribution (compressed when `warped`, docs/math.md (63)), and the standard normal in
+/// the same coordinates as every pair's start.
+fn standardize(
+    data: &TrainingSet,
+    dists: &[BaseDist],
+    warped: bool,
+) -> (TrainingSet, Vec<StartDist>) {
     let mut set = data.clone();
     for (x1, base) in set.x1.iter_mut().zip(dists) {
-        *x1 = base.to_standard(*x1);
+        let z1 = base.to_standard(*x1);
+        *x1 = if warped { warp::compress2(z1) } else { z1 };
     }
-    let unit = BaseDist::Disk {
-        mu: [0.0, 0.0],
-        ln_sigma: [0.0, 0.0],
-    };
-    (set, vec![unit; dists.len()])
+    (set, vec![StartDist::Standard { warped }; dists.len()])
 }
 
 /// Records a stage's loss curve.
@@ -358,13 +365,14 @@ pub fn fit_data(
     stages.push(curve.report("base", t.elapsed().as_secs_f64())?);
     let dists = base_distributions(&base, &def, data);
     // In standard coordinates (docs/math.md, §6.3) every later stage sees the targets as
-    // `z1 = (x1 - mu) / sigma` of their own `wi` and the standard normal as the base.
+    // `z1 = (x1 - mu) / sigma` of their own `wi` (compressed by §6.4 when warped) and the
+    // standard normal (likewise compressed) as the base.
     let standard;
     let (data, dists) = if def.standardized {
-        standard = standardize(data, &dists);
+        standard = standardize(data, &dists, def.standard_warp);
         (&standard.0, standard.1)
     } else {
-        (data, dists)
+        (data, dists.into_iter().map(StartDist::Chart).collect())
     };
 
     let t = Instant::now();

@@ -6,7 +6,7 @@ use crate::block::Block;
 use crate::dataset::TrainingSet;
 use crate::features::push_velocity_row;
 use crate::mlp::Mlp;
-use diffbsdf::internals::base::BaseDist;
+use crate::start::StartDist;
 use diffbsdf::ModelDef;
 use rand::Rng;
 use rand_pcg::Pcg64;
@@ -22,7 +22,7 @@ pub fn reflow_pairs(
     teacher: &Mlp,
     def: &ModelDef,
     data: &TrainingSet,
-    base: &[BaseDist],
+    base: &[StartDist],
     count: usize,
     steps: usize,
     rng: &mut Pcg64,

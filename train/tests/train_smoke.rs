@@ -70,29 +70,32 @@ fn tiny_disk_fit_trains_exports_and_loads() {
     }
 }
 
-/// The half-vector chart, with the flow in the chart's coordinates and in the base's
-/// standard ones (docs/math.md, §6.3): a tiny fit loads with its domain, its PDFs agree,
+/// The half-vector chart, with the flow in the chart's coordinates, in the base's
+/// standard ones (docs/math.md, §6.3) and in the warped standard ones (§6.4): a tiny fit
+/// loads with its domain and coordinates, its PDFs agree,
 /// and the lobe of a rough conductor sits near the chart's centre (half vectors about the
 /// normal) at oblique incidence, where the directions themselves sit about the mirror
 /// direction.
 #[test]
 fn tiny_half_vector_fit_centres_the_lobe() {
-    for standardized in [false, true] {
+    for (standardized, warped) in [(false, false), (true, false), (true, true)] {
         let material = parse_spec("conductor:ggx,alpha=0.3,metal=Cu").unwrap();
         let mut cfg = FitConfig::tiny(Domain::HalfVector, 3);
         cfg.def.standardized = standardized;
+        cfg.def.standard_warp = warped;
         let f = fit_material(material.as_ref(), "smoke", &cfg, &Silent).unwrap();
-        half_vector_fit_centres_the_lobe(&f, standardized);
+        half_vector_fit_centres_the_lobe(&f, standardized, warped);
     }
 }
 
-fn half_vector_fit_centres_the_lobe(f: &Fitted, standardized: bool) {
+fn half_vector_fit_centres_the_lobe(f: &Fitted, standardized: bool, warped: bool) {
     let s = stage(f, "student");
     assert!(s.loss_end < s.loss_start);
     for precision in [Precision::F32, Precision::F16] {
         let m = Model3x32::from_blob(&f.model.blob(precision).unwrap()).unwrap();
         assert_eq!(m.def().domain, Domain::HalfVector);
         assert_eq!(m.def().standardized, standardized);
+        assert_eq!(m.def().standard_warp, warped);
         assert_eq!(m.def().incident, IncidentRange::UpperHemisphere);
         check_upper_hemisphere_consistency(&m);
         let wi = Vec3::new(0.866, 0.0, 0.5);

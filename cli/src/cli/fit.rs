@@ -34,11 +34,14 @@ pub enum DomainArg {
     Auto,
 }
 
-/// Coordinates of the flow on the command line (`ModelDef::standardized`).
+/// Coordinates of the flow on the command line (`ModelDef::standardized`,
+/// `ModelDef::standard_warp`).
 #[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
 pub enum CoordinatesArg {
     /// The base distribution's standard coordinates (disk and half-vector chart).
     Standard,
+    /// The standard coordinates compressed by `K asinh(z / K)` (disk and half-vector chart).
+    Warped,
     /// The chart's own coordinates.
     Chart,
 }
@@ -160,9 +163,10 @@ pub struct FitArgs {
     #[arg(long)]
     pub euler_times: bool,
     /// Coordinates of the flow on the disk and the half-vector chart: the base
-    /// distribution's standard coordinates z = (x - mu) / sigma, or the chart's own
-    /// (docs/math.md, section 6.3). Default: standard on the half-vector chart with the
-    /// default recipe, the chart's otherwise.
+    /// distribution's standard coordinates z = (x - mu) / sigma (docs/math.md, section
+    /// 6.3), those compressed by 3 asinh(z / 3) (warped, section 6.4), or the chart's own.
+    /// Default: warped on the half-vector chart with the default recipe, the chart's
+    /// otherwise.
     #[arg(long, value_enum)]
     pub coordinates: Option<CoordinatesArg>,
     /// Condition on the full wi even when the material is isotropic (by default an
@@ -370,7 +374,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     set(&mut c.teacher.batch, args.batch);
     c.student_euler_times |= args.euler_times;
     if let Some(k) = args.coordinates {
-        c.def.standardized = k == CoordinatesArg::Standard && !domain.is_spherical();
+        let standard = k != CoordinatesArg::Chart && !domain.is_spherical();
+        c.def.standardized = standard;
+        c.def.standard_warp = standard && k == CoordinatesArg::Warped;
     }
     if args.ignore_isotropy {
         c.use_isotropy = false;

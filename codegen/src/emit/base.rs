@@ -103,7 +103,11 @@ impl Emitter<'_> {
     pub(super) fn base_sample(&mut self) {
         let cond_t = self.st("Cond");
         let vec_t = self.st("Vec2");
-        if self.standardized() {
+        if self.warped() {
+            self.code.line(
+                "// y0 for u: the standard normal's quantiles, warped (the flow runs in warped standard coordinates).",
+            );
+        } else if self.standardized() {
             self.code.line(
                 "// z0 for u: the standard normal's quantiles (the flow runs in standard coordinates).",
             );
@@ -128,10 +132,19 @@ impl Emitter<'_> {
             let wc = self.call("wrapped_cauchy_sample", false, &["u1", &g]);
             self.code.line(format!("r.y = cond.p2 + {wc};"));
         } else if self.standardized() {
-            // docs/math.md, (59).
+            // docs/math.md, (59); (63) in warped coordinates.
             let q1 = self.call("quantile", false, &["u1"]);
-            self.code.line(format!("r.x = {q0};"));
-            self.code.line(format!("r.y = {q1};"));
+            if self.warped() {
+                let (w0, w1) = (
+                    self.call("warp_compress", false, &[&q0]),
+                    self.call("warp_compress", false, &[&q1]),
+                );
+                self.code.line(format!("r.x = {w0};"));
+                self.code.line(format!("r.y = {w1};"));
+            } else {
+                self.code.line(format!("r.x = {q0};"));
+                self.code.line(format!("r.y = {q1};"));
+            }
         } else {
             let q1 = self.call("quantile", false, &["u1"]);
             let e2 = self.math(Math::Exp, "cond.p2");
@@ -162,8 +175,17 @@ impl Emitter<'_> {
             .line("// The end point in chart coordinates: x = mu + sigma z (docs/math.md, (61)).");
         let e2 = self.math(Math::Exp, "cond.p2");
         let e3 = self.math(Math::Exp, "cond.p3");
-        self.code.line(format!("a = cond.p0 + {e2} * a;"));
-        self.code.line(format!("b = cond.p1 + {e3} * b;"));
+        let (za, zb) = if self.warped() {
+            // z of the warped end point (docs/math.md, (64)).
+            (
+                self.call("warp_expand", false, &["a"]),
+                self.call("warp_expand", false, &["b"]),
+            )
+        } else {
+            ("a".to_string(), "b".to_string())
+        };
+        self.code.line(format!("a = cond.p0 + {e2} * {za};"));
+        self.code.line(format!("b = cond.p1 + {e3} * {zb};"));
     }
 
     /// The flow's end point for the chart point `(ya, yb)`: `(x - mu) / sigma` in standard
@@ -174,8 +196,18 @@ impl Emitter<'_> {
         }
         let e2 = self.math(Math::Exp, "-cond.p2");
         let e3 = self.math(Math::Exp, "-cond.p3");
-        self.decl(T::F, "za", &format!("(ya - cond.p0) * {e2}"));
-        self.decl(T::F, "zb", &format!("(yb - cond.p1) * {e3}"));
+        let (za, zb) = (
+            format!("(ya - cond.p0) * {e2}"),
+            format!("(yb - cond.p1) * {e3}"),
+        );
+        if self.warped() {
+            // The warped end point (docs/math.md, (63)).
+            self.decl(T::F, "za", &self.call("warp_compress", false, &[&za]));
+            self.decl(T::F, "zb", &self.call("warp_compress", false, &[&zb]));
+        } else {
+            self.decl(T::F, "za", &za);
+            self.decl(T::F, "zb", &zb);
+        }
         ("za", "zb")
     }
 
@@ -194,7 +226,11 @@ impl Emitter<'_> {
             self.code
                 .line(format!("return {mh} * z * z + {c} - cond.p1 + {wc};"));
         } else {
-            if self.standardized() {
+            if self.warped() {
+                // z0 of the warped start point (docs/math.md, (64)).
+                self.decl(T::F, "z0", &self.call("warp_expand", false, &["x0"]));
+                self.decl(T::F, "z1", &self.call("warp_expand", false, &["x1"]));
+            } else if self.standardized() {
                 // The start point is z0 already (docs/math.md, (60)).
                 self.decl(T::F, "z0", "x0");
                 self.decl(T::F, "z1", "x1");
@@ -204,8 +240,14 @@ impl Emitter<'_> {
                 self.decl(T::F, "z0", &format!("(x0 - cond.p0) * {e0}"));
                 self.decl(T::F, "z1", &format!("(x1 - cond.p1) * {e1}"));
             }
+            // Plus ln |dz/dy| at the start point in warped coordinates (docs/math.md, (66)).
+            let warp = if self.warped() {
+                format!(" + {}", self.warp_ln_expansion_sum("x0", "x1"))
+            } else {
+                String::new()
+            };
             self.code.line(format!(
-                "return ({mh} * z0 * z0 + {c}) + ({mh} * z1 * z1 + {c}) - cond.p2 - cond.p3;"
+                "return ({mh} * z0 * z0 + {c}) + ({mh} * z1 * z1 + {c}) - cond.p2 - cond.p3{warp};"
             ));
         }
         self.end_fn();

@@ -111,6 +111,13 @@ impl Emitter<'_> {
             self.code.line(l);
         }
         self.code.close("}");
+        if self.warped() {
+            self.code.line(
+                "// ln |dz/dy| of the warp at the end point joins the steps' sum (docs/math.md, (66)).",
+            );
+            let end = self.warp_ln_expansion_sum("a", "b");
+            self.code.line(format!("ln_det = ln_det + {end};"));
+        }
         self.chart_point();
         let td = self.call("to_direction", false, &self.point_args("a", "b"));
         self.decl(rt, "r", &td);

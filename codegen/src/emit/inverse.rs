@@ -375,6 +375,13 @@ impl Emitter<'_> {
             self.math(Math::Log, "x.det")
         ));
         self.code.close("}");
+        if self.warped() {
+            self.code.line(
+                "// ln |dz/dy| of the warp at the end point joins the steps' sum (docs/math.md, (66)).",
+            );
+            let end = self.warp_ln_expansion_sum(fa, fb);
+            self.code.line(format!("ln_det = ln_det + {end};"));
+        }
         let lp = self.call("base_ln_pdf", false, &["cond", "a", "b"]);
         let lm = self.ln_measure("wo.z", "ya");
         self.decl(

@@ -7,6 +7,7 @@
 //! |--------------|----------------------------------------------------------|
 //! | `net.rs`     | `src/net/`: SiLU, `wi` encoding, the two MLPs, `dv/dx`   |
 //! | `base.rs`    | `src/base/`: Gaussian quantile, wrapped Cauchy, `p0`     |
+//! | `warp.rs`    | `src/base/warp.rs`: the warp of the standard coordinates |
 //! | `domain.rs`  | `src/domain/`: wrap, features, advance, directions       |
 //! | `frame.rs`   | `src/frame.rs`: the incident frame of isotropic models   |
 //! | `input.rs`   | `src/input.rs`: input checks, the entry points' prologue |
@@ -27,6 +28,7 @@ mod inverse;
 mod net;
 #[cfg(test)]
 mod tests;
+mod warp;
 
 use crate::desc::ModelDesc;
 use crate::dialect::{Dialect, Math, T};
@@ -130,6 +132,11 @@ impl<'a> Emitter<'a> {
     fn standardized(&self) -> bool {
         self.m.def.standardized
     }
+    /// The flow runs in the compressed standard coordinates `y = K asinh(z / K)`
+    /// (docs/math.md, section 6.4).
+    fn warped(&self) -> bool {
+        self.m.def.standardized && self.m.def.standard_warp
+    }
     fn needs_velocity(&self) -> bool {
         self.e.direction || self.e.pdf
     }
@@ -173,6 +180,17 @@ impl<'a> Emitter<'a> {
         }
         if self.sphere() && self.needs_ln_pdf() {
             self.wc_ln_pdf();
+        }
+        // src/base/warp.rs: compress at the start (sample) and end (pdf); expand at the
+        // end (sample) and start (every density); the log-Jacobian with every density.
+        if self.warped() && (self.needs_base_sample() || self.e.pdf) {
+            self.warp_compress();
+        }
+        if self.warped() {
+            self.warp_expand();
+        }
+        if self.warped() && self.needs_ln_pdf() {
+            self.warp_ln_expansion();
         }
         if self.needs_base_sample() {
             self.base_sample();

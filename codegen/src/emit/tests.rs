@@ -9,7 +9,7 @@ use diffbsdf::spec::{
     ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT, EXP_ARG_LIMIT_F16, EXP_ARG_MAX,
     EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI, LN_SCALE_MAX,
     LN_SCALE_MIN, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO,
-    UNIT_TOLERANCE, VELOCITY_OUTPUTS,
+    STANDARD_WARP_K, UNIT_TOLERANCE, VELOCITY_OUTPUTS,
 };
 use diffbsdf::{Domain, ModelDef};
 
@@ -21,14 +21,19 @@ struct Output {
     code: String,
 }
 
-/// Every language and precision, for an isotropic disk model and a sphere model.
+/// Every language and precision, for an isotropic disk model, a sphere model and a
+/// half-vector model in warped standard coordinates.
 fn outputs() -> Vec<Output> {
     let mut disk = ModelDef::paper_disk();
     disk.isotropic = true;
     let mut sphere = ModelDef::paper_sphere();
     sphere.isotropic = false;
+    let mut warped = disk;
+    warped.domain = Domain::HalfVector;
+    warped.standardized = true;
+    warped.standard_warp = true;
     let mut out = Vec::new();
-    for def in [disk, sphere] {
+    for def in [disk, sphere, warped] {
         let bytes = blob(&def);
         for language in [Language::Glsl, Language::Wgsl, Language::C] {
             for float in [Float::F32, Float::F16] {
@@ -174,6 +179,25 @@ fn densities_and_scales_use_the_kernels_constants() {
         let readout = format!("-> {VELOCITY_OUTPUTS}:");
         let v = body(&o, "velocity");
         assert!(v.iter().any(|l| l.contains(&readout)), "{}", o.label);
+    }
+}
+
+#[test]
+fn warp_scale_is_the_kernels() {
+    let warped: Vec<Output> = outputs()
+        .into_iter()
+        .filter(|o| o.def.standard_warp)
+        .collect();
+    assert_eq!(warped.len(), 5);
+    for o in warped {
+        // The first line of each is `a = |z| / K`, `s = y / K` or `a = |y| / K`.
+        for name in ["warp_compress", "warp_expand", "warp_ln_expansion"] {
+            let b = body(&o, name);
+            assert_eq!(lits(b[0]), [STANDARD_WARP_K], "{}: {name}", o.label);
+        }
+    }
+    for o in outputs().iter().filter(|o| !o.def.standard_warp) {
+        assert!(!o.code.contains("warp_"), "{}", o.label);
     }
 }
 

@@ -143,6 +143,12 @@ pub fn test_models() -> Vec<TestModel> {
         d.standardized = true;
         d
     };
+    // ... compressed by K asinh(z / K) (docs/math.md, §6.4).
+    let warped = |mut d: ModelDef| {
+        d.standardized = true;
+        d.standard_warp = true;
+        d
+    };
     let mut models = vec![
         TestModel {
             name: "random_disk".into(),
@@ -221,14 +227,26 @@ pub fn test_models() -> Vec<TestModel> {
             ),
         },
         TestModel {
-            name: "random_half_vector_std_f16".into(),
+            name: "random_half_vector_warp".into(),
             blob: random_blob(
                 &named(
-                    standard(iso(half_vector)),
-                    "random_half_vector_std_f16",
-                    Precision::F16,
+                    warped(iso(half_vector)),
+                    "random_half_vector_warp",
+                    Precision::F32,
                 ),
                 21,
+                1.2,
+            ),
+        },
+        TestModel {
+            name: "random_half_vector_warp_f16".into(),
+            blob: random_blob(
+                &named(
+                    warped(iso(half_vector)),
+                    "random_half_vector_warp_f16",
+                    Precision::F16,
+                ),
+                22,
                 1.2,
             ),
         },
