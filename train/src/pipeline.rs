@@ -78,7 +78,8 @@ impl FitConfig {
     /// (`ModelDef::standard_warp`, §6.4): measured on the RGL files, standard coordinates
     /// took golden yellow 2.29x -> 1.64x and orange 71.6x -> 42.7x the tabular sampler's
     /// mean RV, the warp golden yellow 1.64x -> 1.53x, orange -> 36.8x and `ilm_solo_m_68`
-    /// 15.6x -> 11.2x (docs/measured-materials.md).
+    /// 15.6x -> 11.2x (docs/measured-materials.md). It costs analytic lobes at grazing
+    /// incidence (anisotropic copper 0.75x -> 1.23x its visible-normal sampler).
     pub fn standard(domain: Domain, seed: u64) -> Self {
         let mut def = paper_def(domain);
         def.standardized = domain == Domain::HalfVector;
