@@ -1,6 +1,6 @@
 //! The compressive warp of the standard coordinates (docs/math.md, §6.4): a model with
 //! [`crate::ModelDef::standard_warp`] runs its flow in `y = K asinh(z / K)` per coordinate,
-//! `K` = [`STANDARD_WARP_K`]. Near the lobe (`|z| << K`) `y = z`; far out, where a
+//! `K` = [`crate::spec::STANDARD_WARP_K`]. Near the lobe (`|z| << K`) `y = z`; far out, where a
 //! measured target keeps mass many standard deviations from the base's centre (a grazing
 //! tail, a second lobe), `y` grows like `K ln(2 |z| / K)`, so the velocity net sees the
 //! whole target within a few units instead of dozens.
