@@ -32,6 +32,7 @@ pub mod metrics;
 pub mod mlp;
 pub mod pipeline;
 pub mod progress;
+pub mod refine;
 pub mod reflow;
 pub mod start;
 mod tiles;

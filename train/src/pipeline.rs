@@ -10,6 +10,7 @@ use crate::export::model_from_nets;
 use crate::flow_fit::{train_flow, Coupling, FlowConfig};
 use crate::mlp::Mlp;
 use crate::progress::Progress;
+use crate::refine::{refine, RefineConfig};
 use crate::reflow::reflow_pairs;
 use crate::start::StartDist;
 use diffbsdf::internals::base::{warp, BaseDist};
@@ -63,6 +64,9 @@ pub struct FitConfig {
     /// (sphere, seed 0): 1.0 gives mean RV 0.151, worst 0.66 (89 deg); 0.5 gives 0.139,
     /// worst 0.33; all solid angle starves normal incidence (copper disk: RV 0.39 there).
     pub angle_fraction: f64,
+    /// Variance refinement of the distilled student against the material (flat charts;
+    /// [`crate::refine`], docs/math.md §11); `iters = 0` skips it.
+    pub refine: RefineConfig,
 }
 
 impl FitConfig {
@@ -80,6 +84,10 @@ impl FitConfig {
     /// mean RV, the warp golden yellow 1.64x -> 1.53x, orange -> 36.8x and `ilm_solo_m_68`
     /// 15.6x -> 11.2x (docs/measured-materials.md). It costs analytic lobes at grazing
     /// incidence (anisotropic copper 0.75x -> 1.23x its visible-normal sampler).
+    ///
+    /// The distilled student is then refined to lower its relative variance against the
+    /// material directly ([`RefineConfig::default`], docs/math.md §11; measured in
+    /// docs/measured-materials.md, "Variance refinement").
     pub fn standard(domain: Domain, seed: u64) -> Self {
         let mut def = paper_def(domain);
         def.standardized = domain == Domain::HalfVector;
@@ -93,6 +101,7 @@ impl FitConfig {
         c.pairs = STANDARD_PAIRS;
         c.teacher_net.width = STANDARD_TEACHER_WIDTH;
         c.teacher.iters = STANDARD_TEACHER_ITERS;
+        c.refine = RefineConfig::default();
         c
     }
 
@@ -139,6 +148,7 @@ impl FitConfig {
             grazing: 0.0,
             use_isotropy: true,
             angle_fraction: 0.5,
+            refine: RefineConfig::OFF,
         }
     }
 
@@ -296,6 +306,21 @@ pub fn fit_material(
     let data = TrainingSet::from_source(cfg.domain(), cfg.freqs(), &source);
     progress.advance(cfg.pairs as u64, None);
     let mut fitted = fit_data(&data, name, cfg, progress)?;
+    if cfg.refine.iters > 0 && crate::refine::supports(fitted.model.def()) {
+        let t = Instant::now();
+        let (model, what) = refine(&fitted.model, material, &cfg.refine, cfg.seed, progress)?;
+        progress.finish();
+        fitted.model = model;
+        // The validation loss (mean ln(1 + RV)) before and after; the refined weights are
+        // kept only where it fell.
+        fitted.stages.push(StageReport {
+            stage: "refine",
+            seconds: t.elapsed().as_secs_f64(),
+            loss_start: what.loss_before,
+            loss_end: what.loss_after,
+        });
+        fitted.seconds += t.elapsed().as_secs_f64();
+    }
     fitted.stages.insert(
         0,
         StageReport {

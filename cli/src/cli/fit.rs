@@ -162,6 +162,11 @@ pub struct FitArgs {
     /// Train the student only at its Euler times k/N.
     #[arg(long)]
     pub euler_times: bool,
+    /// Iterations of the variance refinement of the student against the material (disk
+    /// and half-vector chart; docs/math.md section 11): 0 skips it (the fits before
+    /// 2026-12-05). Default: 300 with the standard recipe, 0 with --quick and --tiny.
+    #[arg(long)]
+    pub refine_iters: Option<usize>,
     /// Coordinates of the flow on the disk and the half-vector chart: the base
     /// distribution's standard coordinates z = (x - mu) / sigma (docs/math.md, section
     /// 6.3), those compressed by 3 asinh(z / 3) (warped, section 6.4), or the chart's own.
@@ -395,6 +400,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     }
     if let Some(g) = args.teacher_ot {
         c.teacher.ot_group = g;
+    }
+    if let Some(n) = args.refine_iters {
+        c.refine.iters = n;
     }
     if let Some(lr) = args.student_lr {
         c.student.lr = lr;

@@ -9,6 +9,7 @@ pub mod demo;
 pub mod eval;
 pub mod fit;
 pub mod material;
+pub mod refine;
 pub mod tradeoff;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +39,8 @@ pub enum Command {
     Fit(Box<fit::FitArgs>),
     /// Measure a blob's sampling quality against a material.
     Eval(eval::EvalArgs),
+    /// Refine a fitted blob's student to lower its variance against its material.
+    Refine(refine::RefineArgs),
     /// The main job: the embedded default model, its quality and cost, written to a folder.
     Demo(demo::DemoArgs),
     /// GLSL, WGSL or a standalone C header from a blob.
@@ -83,6 +86,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), CliError> {
         Command::Pdf(a) => blob::run_pdf(a, out).map_err(CliError::Blob),
         Command::Fit(a) => fit::run(*a, out).map_err(CliError::Train),
         Command::Eval(a) => eval::run(a, out).map_err(CliError::Train),
+        Command::Refine(a) => refine::run(a, out).map_err(CliError::Train),
         Command::Demo(a) => demo::run(a, out).map_err(CliError::Train),
         Command::Codegen(a) => codegen::run(&a, out).map_err(CliError::Codegen),
         Command::Tradeoff(a) => tradeoff::run(a, out).map_err(CliError::Train),

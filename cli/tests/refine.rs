@@ -1,0 +1,99 @@
+//! `diffbsdf refine` and `fit --refine-iters` end to end on tiny fits (seconds): the
+//! refined blobs load with the fitted model's definition, the stage reports its
+//! validation losses, and `fit --refine-iters N` gives the bytes of `fit --refine-iters 0`
+//! followed by `refine --iters N` with the same seed (the stage is a function of the
+//! distilled model and the seed).
+
+use clap::Parser;
+use diffbsdf::AnyModel;
+use diffbsdf_cli::cli::{run, Cli};
+use serde_json::Value;
+
+const SPEC: &str = "conductor:ggx,alpha=0.3,metal=Cu";
+
+fn call(args: &[&str]) -> Vec<u8> {
+    let cli = Cli::try_parse_from(args).unwrap();
+    let mut buf = Vec::new();
+    run(cli, &mut buf).unwrap();
+    buf
+}
+
+fn fit(out: &std::path::Path, refine_iters: &str) -> Value {
+    let out = out.to_str().unwrap();
+    let args = [
+        "diffbsdf",
+        "fit",
+        SPEC,
+        "--tiny",
+        "--domain",
+        "half-vector",
+        "--coordinates",
+        "warped",
+        "--refine-iters",
+        refine_iters,
+        "--no-eval",
+        "--json",
+        "--exact-samples",
+        "20000",
+        "--out",
+        out,
+    ];
+    serde_json::from_slice(&call(&args)).unwrap()
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("diffbsdf-refine-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn refine_command_matches_the_fit_stage() {
+    let (plain, fitted) = (scratch("plain.dbsdf"), scratch("fitted.dbsdf"));
+    let without = fit(&plain, "0");
+    assert!(without["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|s| s["stage"] != "refine"));
+    let with = fit(&fitted, "4");
+    let stage = with["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["stage"] == "refine")
+        .expect("a refine stage");
+    assert!(stage["loss_start"].as_f64().unwrap() > 0.0);
+
+    let refined = scratch("refined.dbsdf");
+    let text = call(&[
+        "diffbsdf",
+        "refine",
+        plain.to_str().unwrap(),
+        SPEC,
+        "--iters",
+        "4",
+        "--out",
+        refined.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8(text).unwrap();
+    assert!(text.starts_with("validation mean ln(1 + RV): "), "{text}");
+    let bytes = |p: &std::path::Path| std::fs::read(p).unwrap();
+    let (a, b) = (bytes(&refined), bytes(&fitted));
+    let (ma, mb) = (
+        AnyModel::from_blob(&a).unwrap(),
+        AnyModel::from_blob(&b).unwrap(),
+    );
+    assert_eq!(ma.def().domain, mb.def().domain);
+    assert!(ma.def().standard_warp);
+    // Same weights; the stored names differ (each blob's file stem).
+    let params = |m: &AnyModel| {
+        let mut p = vec![0.0f32; 4096];
+        let n = m.params(&mut p).unwrap();
+        p.truncate(n);
+        p
+    };
+    assert!(params(&ma) == params(&mb), "the two refinements differ");
+    let f16 = refined.with_file_name("refined.f16.dbsdf");
+    assert!(AnyModel::from_blob(&bytes(&f16)).is_ok());
+}

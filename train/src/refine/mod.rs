@@ -1,0 +1,389 @@
+//! Variance refinement of the student (docs/math.md, §11, (67)-(70)). Distillation
+//! teaches the student its teacher's coupling; what a renderer pays for is the relative
+//! variance of `w = Y(f) |cos theta_o| / pdf`. This stage tunes the student's weights to
+//! lower `ln(1 + RV(wi))` itself, averaged over incidences, by reparameterised gradients:
+//! for a fixed start point the end point and the log-density move with the weights, so
+//! `d ln w = d ln q(x_N) + d sum_k ln det(I + h J_k)` (the submodules `target`, `path`
+//! and `net`), and `d ln(1 + RV) = 2 E[(w^2 / E[w^2] - w / E[w]) d ln w]`; half of the
+//! gradient is estimated from the material's own samples instead, which reach where the
+//! flow's density is too low (70).
+//!
+//! The base net, the shape, the step count and so the blob format are unchanged: the
+//! refined student is exported and checked for exactness like any other. The stage keeps
+//! the refined weights only where they lower the loss on a fixed validation set.
+//! Flat charts only (disk and half-vector: the sphere's features are not `x` itself).
+
+mod net;
+mod path;
+mod target;
+
+use crate::adam::{cosine_lr, Adam};
+use crate::data::DomainTarget;
+use crate::error::TrainError;
+use crate::features::encoding;
+use crate::mlp::{layers_of, param_count, Mlp};
+use crate::progress::Progress;
+use diffbsdf::glam::Vec3;
+use diffbsdf::internals::base::BaseDist;
+use diffbsdf::spec::BASE_OUTPUTS;
+use diffbsdf::{AnyModel, Domain, ModelDef, Net};
+use diffbsdf_materials::{DVec3, Material};
+use path::Path;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use rayon::prelude::*;
+use target::Incidence;
+
+/// Settings of the refinement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefineConfig {
+    /// Adam iterations (0: no refinement).
+    pub iters: usize,
+    /// Incidences per iteration, `theta_i` uniform in angle.
+    pub incidences: usize,
+    /// Samples per incidence (jittered on a square grid of `u`).
+    pub samples: usize,
+    /// Peak learning rate (cosine decay to 5 %).
+    pub lr: f32,
+    /// Share of the gradient estimated from target samples (the material's own sampler,
+    /// importance-weighted; they see where the flow's density is too low, which its own
+    /// samples rarely reach); the rest from the flow's samples. As many target samples
+    /// as flow samples per incidence when above 0.
+    pub target_share: f32,
+}
+
+impl RefineConfig {
+    /// The standard recipe's: 300 iterations at a peak rate of 2e-4, half the gradient
+    /// from target samples (measured in docs/measured-materials.md, "Variance
+    /// refinement").
+    pub const STANDARD: RefineConfig = RefineConfig {
+        iters: 300,
+        incidences: 32,
+        samples: 256,
+        lr: 2e-4,
+        target_share: 0.5,
+    };
+
+    /// No refinement (the standard settings, no iterations).
+    pub const OFF: RefineConfig = RefineConfig {
+        iters: 0,
+        ..Self::STANDARD
+    };
+}
+
+impl Default for RefineConfig {
+    fn default() -> Self {
+        Self::STANDARD
+    }
+}
+
+/// What the stage did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refined {
+    /// Validation loss (mean `ln(1 + RV)`) of the student as distilled.
+    pub loss_before: f64,
+    /// Validation loss of the refined weights.
+    pub loss_after: f64,
+    /// Whether the refined weights were kept (they lowered the validation loss).
+    pub kept: bool,
+}
+
+/// Largest `theta_i` drawn (radians): 89.5 degrees.
+const THETA_MAX: f32 = 89.5 * std::f32::consts::PI / 180.0;
+/// Incidences of the validation set (`theta_i` at the midpoints of equal bands).
+const VALIDATION_INCIDENCES: usize = 24;
+/// Samples per validation incidence.
+const VALIDATION_SAMPLES: usize = 4096;
+
+/// Whether `def`'s student can be refined (flat charts).
+pub fn supports(def: &ModelDef) -> bool {
+    matches!(def.domain, Domain::Disk | Domain::HalfVector)
+}
+
+/// The two nets of a model, as the trainer holds them.
+struct Nets {
+    base: Mlp,
+    velocity: Mlp,
+}
+
+impl Nets {
+    fn of(model: &AnyModel) -> Result<Nets, TrainError> {
+        let def = model.def();
+        let (base_layers, velocity_layers) =
+            (layers_of(def, Net::Base), layers_of(def, Net::Velocity));
+        let n_base = param_count(&base_layers);
+        let mut params = vec![0.0f32; n_base + param_count(&velocity_layers)];
+        model.params(&mut params)?;
+        let velocity = params.split_off(n_base);
+        Ok(Nets {
+            base: Mlp::from_params(base_layers, params).ok_or(TrainError::Mismatch)?,
+            velocity: Mlp::from_params(velocity_layers, velocity).ok_or(TrainError::Mismatch)?,
+        })
+    }
+
+    fn model(&self, def: ModelDef) -> Result<AnyModel, TrainError> {
+        crate::export::model_from_nets(def, &self.base, &self.velocity)
+    }
+}
+
+/// Refines `model`'s student against `material` (see the module); returns the model to
+/// ship (the refined one, or `model` itself where refinement did not lower the
+/// validation loss) and what happened.
+pub fn refine(
+    model: &AnyModel,
+    material: &dyn Material,
+    cfg: &RefineConfig,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<(AnyModel, Refined), TrainError> {
+    let def = *model.def();
+    let mut nets = Nets::of(model)?;
+    let before = validation_loss(&def, &nets, material);
+    if cfg.iters == 0 || !supports(&def) {
+        let same = Refined {
+            loss_before: before,
+            loss_after: before,
+            kept: false,
+        };
+        return Ok((*model, same));
+    }
+    progress.stage("refine", cfg.iters as u64);
+    let mut adam = Adam::new(nets.velocity.params().len());
+    let mut rng = Pcg64::seed_from_u64(seed ^ 0x5eed_2ef1_9e00_0001);
+    for it in 0..cfg.iters {
+        let jobs: Vec<(Vec3, u64)> = (0..cfg.incidences)
+            .map(|_| (draw_incidence(&def, &mut rng), rng.gen()))
+            .collect();
+        let (grad, loss) = batch_gradient(&def, &nets, material, &jobs, cfg);
+        let lr = cosine_lr(cfg.lr, 0.05, it, cfg.iters);
+        adam.update(nets.velocity.params_mut(), &grad, lr);
+        progress.advance(1, Some(loss));
+    }
+    let after = validation_loss(&def, &nets, material);
+    let kept = after < before;
+    let out = if kept { nets.model(def)? } else { *model };
+    Ok((
+        out,
+        Refined {
+            loss_before: before,
+            loss_after: after,
+            kept,
+        },
+    ))
+}
+
+/// A training incidence: `theta_i` uniform in angle on `[0, THETA_MAX]`, `phi_i` 0 for an
+/// isotropic model (its frame) and uniform otherwise.
+fn draw_incidence(def: &ModelDef, rng: &mut Pcg64) -> Vec3 {
+    let theta = THETA_MAX * rng.gen::<f32>();
+    let phi = if def.isotropic {
+        0.0
+    } else {
+        std::f32::consts::TAU * rng.gen::<f32>()
+    };
+    Vec3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    )
+}
+
+/// Mean over `jobs` of the gradient of `ln(1 + RV)` and the mean loss.
+fn batch_gradient(
+    def: &ModelDef,
+    nets: &Nets,
+    material: &dyn Material,
+    jobs: &[(Vec3, u64)],
+    cfg: &RefineConfig,
+) -> (Vec<f32>, f64) {
+    let parts: Vec<(Vec<f32>, f64)> = jobs
+        .par_iter()
+        .map(|&(wi, seed)| incidence_gradient(def, nets, material, wi, seed, cfg))
+        .collect();
+    let n = parts.len().max(1) as f32;
+    let mut grad = vec![0.0f32; nets.velocity.params().len()];
+    let mut loss = 0.0;
+    for (g, l) in &parts {
+        grad.iter_mut().zip(g).for_each(|(a, b)| *a += b / n);
+        loss += l / n as f64;
+    }
+    (grad, loss)
+}
+
+/// Mean `ln(1 + RV)` over the fixed validation incidences.
+fn validation_loss(def: &ModelDef, nets: &Nets, material: &dyn Material) -> f64 {
+    let losses: Vec<f64> = (0..VALIDATION_INCIDENCES)
+        .into_par_iter()
+        .map(|k| {
+            let theta = THETA_MAX * (k as f32 + 0.5) / VALIDATION_INCIDENCES as f32;
+            let phi = if def.isotropic { 0.0 } else { 2.4 * k as f32 };
+            let wi = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            let seed = 0x7a11_da7e ^ k as u64;
+            let cfg = RefineConfig {
+                samples: VALIDATION_SAMPLES,
+                ..RefineConfig::OFF
+            };
+            incidence_loss(def, nets, material, wi, seed, &cfg, false).1
+        })
+        .collect();
+    losses.iter().sum::<f64>() / losses.len().max(1) as f64
+}
+
+/// `ln(1 + RV)` of one incidence and its gradient with respect to the velocity net's
+/// parameters.
+fn incidence_gradient(
+    def: &ModelDef,
+    nets: &Nets,
+    material: &dyn Material,
+    wi: Vec3,
+    seed: u64,
+    cfg: &RefineConfig,
+) -> (Vec<f32>, f64) {
+    incidence_loss(def, nets, material, wi, seed, cfg, true)
+}
+
+/// `ln(1 + RV)` of one incidence from `cfg.samples` jittered `u`, and (when
+/// `with_gradient`) its gradient: (69) over the flow's samples, mixed with the same over
+/// target samples, (70) (`cfg.target_share`).
+fn incidence_loss(
+    def: &ModelDef,
+    nets: &Nets,
+    material: &dyn Material,
+    wi: Vec3,
+    seed: u64,
+    cfg: &RefineConfig,
+    with_gradient: bool,
+) -> (Vec<f32>, f64) {
+    let samples = cfg.samples;
+    let net = &nets.velocity;
+    let mut base_out = [0.0f32; BASE_OUTPUTS];
+    nets.base
+        .forward(&encoding(wi.to_array(), def.base.freqs), &mut base_out);
+    let inc = Incidence {
+        def,
+        material,
+        wi,
+        base: BaseDist::from_net(def.domain, base_out),
+    };
+    let enc = encoding(wi.to_array(), def.velocity.freqs);
+    let cond = net::condition(net, &enc);
+    let steps = usize::from(def.default_steps.max(1));
+    let mut path = Path::default();
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let side = (samples as f64).sqrt().ceil().max(1.0) as usize;
+    // Pass 1: every sample's start point and ln w (None: lost or zero weight).
+    let draws: Vec<([f32; 2], Option<f64>)> = (0..side * side)
+        .map(|i| {
+            let u = [
+                ((i % side) as f32 + rng.gen::<f32>()) / side as f32,
+                ((i / side) as f32 + rng.gen::<f32>()) / side as f32,
+            ];
+            let u = u.map(|v| v.clamp(1e-7, 1.0 - 1e-7));
+            let (y0, ln_p0) = inc.start(u);
+            let ln_w = path
+                .run(net, &cond, y0, steps)
+                .and_then(|(end, ln_det)| Some(inc.ln_target(end)? - ln_p0 + ln_det));
+            (y0, ln_w.filter(|v| v.is_finite()))
+        })
+        .collect();
+    let top = draws
+        .iter()
+        .filter_map(|d| d.1)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let w: Vec<f64> = draws
+        .iter()
+        .map(|d| d.1.map_or(0.0, |l| (l - top).exp()))
+        .collect();
+    let (s1, s2) = (w.iter().sum::<f64>(), w.iter().map(|v| v * v).sum::<f64>());
+    let mut grad = vec![0.0f32; net.params().len()];
+    if !(s1 > 0.0) {
+        return (grad, 0.0);
+    }
+    // ln(1 + RV) = ln(n E[w^2] / E[w]^2), the lost samples counted with w = 0
+    let loss = (w.len() as f64 * s2 / (s1 * s1)).ln();
+    if !with_gradient {
+        return (grad, loss);
+    }
+    // Pass 2: d ln(1 + RV) = sum_s 2 (w_s^2 / S2 - w_s / S1) d ln w_s
+    let mut cond_grad = vec![0.0f32; cond.len()];
+    let share = cfg.target_share.clamp(0.0, 1.0);
+    if share > 0.0 {
+        let mut target_rng = Pcg64::seed_from_u64(seed ^ 0x7a26_e75a);
+        let ctx = (&inc, net, cond.as_slice(), steps);
+        target_gradient(
+            ctx,
+            &mut target_rng,
+            samples,
+            share,
+            &mut grad,
+            &mut cond_grad,
+        );
+    }
+    let own = 1.0 - share;
+    for ((y0, _), ws) in draws.iter().zip(&w) {
+        let c = own * (2.0 * (ws * ws / s2 - ws / s1)) as f32;
+        if *ws == 0.0 || c == 0.0 {
+            continue;
+        }
+        let Some((end, _)) = path.run(net, &cond, *y0, steps) else {
+            continue;
+        };
+        let Some((_, g)) = inc.ln_target_gradient(end) else {
+            continue;
+        };
+        path.backward(net, [c * g[0], c * g[1]], c, &mut grad, &mut cond_grad);
+    }
+    net::condition_backward(net, &enc, &cond_grad, &mut grad);
+    (grad, loss)
+}
+
+/// Adds `share` times the gradient of `ln(1 + RV)` estimated from `count` target samples:
+/// `1 + RV = E_q[q / p]`, so `grad = -E_s[r grad ln p(x)] / E_s[r]` with
+/// `r = (q / s)(q / p)` for samples of the material's own sampler `s`, and `grad ln p(x)`
+/// at the fixed sample (`Path::fixed_end_backward`).
+fn target_gradient(
+    (inc, net, cond, steps): (&Incidence<'_>, &Mlp, &[f32], usize),
+    rng: &mut Pcg64,
+    count: usize,
+    share: f32,
+    grad: &mut [f32],
+    cond_grad: &mut [f32],
+) {
+    let as64 = |w: Vec3| DVec3::new(f64::from(w.x), f64::from(w.y), f64::from(w.z));
+    let wi64 = as64(inc.wi);
+    let mut path = Path::default();
+    // (start point, ln r) of every valid target sample
+    let kept: Vec<([f32; 2], f64)> = (0..count)
+        .filter_map(|_| {
+            let s = inc
+                .material
+                .sample(wi64, [rng.gen(), rng.gen(), rng.gen()])?;
+            let target = inc.def.domain.target(inc.material, wi64, s.wo);
+            if !(target > 0.0 && s.pdf > 0.0) {
+                return None;
+            }
+            let wo = Vec3::new(s.wo.x as f32, s.wo.y as f32, s.wo.z as f32);
+            let end = inc.end_point(wo)?;
+            let (y0, ln_det) = path.invert(net, cond, end, steps)?;
+            let ln_p = inc.ln_start(y0) - ln_det;
+            let ln_r = (target / s.pdf).ln() + inc.ln_target(end)? - ln_p;
+            ln_r.is_finite().then_some((y0, ln_r))
+        })
+        .collect();
+    let top = kept.iter().map(|k| k.1).fold(f64::NEG_INFINITY, f64::max);
+    let total: f64 = kept.iter().map(|k| (k.1 - top).exp()).sum();
+    if !(total > 0.0) {
+        return;
+    }
+    for (y0, ln_r) in kept {
+        let a = -share * ((ln_r - top).exp() / total) as f32;
+        if a == 0.0 || path.run(net, cond, y0, steps).is_none() {
+            continue;
+        }
+        let _ = path.fixed_end_backward(net, inc.ln_start_gradient(y0), a, grad, cond_grad);
+    }
+}
