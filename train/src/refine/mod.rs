@@ -198,7 +198,7 @@ fn batch_gradient(
 ) -> (Vec<f32>, f64) {
     let parts: Vec<(Vec<f32>, f64)> = jobs
         .par_iter()
-        .map(|&(wi, seed)| incidence_gradient(def, nets, material, wi, seed, cfg))
+        .map(|&(wi, seed)| incidence_loss(def, nets, material, wi, seed, cfg, true))
         .collect();
     let n = parts.len().max(1) as f32;
     let mut grad = vec![0.0f32; nets.velocity.params().len()];
@@ -231,19 +231,6 @@ fn validation_loss(def: &ModelDef, nets: &Nets, material: &dyn Material) -> f64 
         })
         .collect();
     losses.iter().sum::<f64>() / losses.len().max(1) as f64
-}
-
-/// `ln(1 + RV)` of one incidence and its gradient with respect to the velocity net's
-/// parameters.
-fn incidence_gradient(
-    def: &ModelDef,
-    nets: &Nets,
-    material: &dyn Material,
-    wi: Vec3,
-    seed: u64,
-    cfg: &RefineConfig,
-) -> (Vec<f32>, f64) {
-    incidence_loss(def, nets, material, wi, seed, cfg, true)
 }
 
 /// `ln(1 + RV)` of one incidence from `cfg.samples` jittered `u`, and (when

@@ -199,6 +199,35 @@ mod tests {
     use rand::SeedableRng;
     use rand_pcg::Pcg64;
 
+    /// A random half-vector student with a readout large enough to bend the paths, and a
+    /// fixed `wi` encoding.
+    fn test_net(seed: u64) -> (Mlp, Vec<f32>) {
+        let def = paper_def(Domain::HalfVector);
+        let mut rng = Pcg64::seed_from_u64(seed);
+        let mut net = Mlp::new(&def, Net::Velocity, &mut rng);
+        net.scale_last_layer(2.0);
+        let enc = (0..net.inputs() - STATE_INPUTS)
+            .map(|i| (i as f32 * 0.61 + seed as f32).cos())
+            .collect();
+        (net, enc)
+    }
+
+    /// Every fifth entry of `grad` against central differences of `f` in the weights.
+    fn check_gradient(net: &Mlp, grad: &[f32], f: impl Fn(&Mlp) -> f64) {
+        let eps = 1e-2f32;
+        for k in (0..grad.len()).step_by(5) {
+            let (mut plus, mut minus) = (net.clone(), net.clone());
+            plus.params_mut()[k] += eps;
+            minus.params_mut()[k] -= eps;
+            let fd = (f(&plus) - f(&minus)) / (2.0 * eps as f64);
+            let g = grad[k] as f64;
+            assert!(
+                (fd - g).abs() < 3e-3 * (1.0 + g.abs()),
+                "param {k}: {g} vs {fd}"
+            );
+        }
+    }
+
     fn objective(net: &Mlp, enc: &[f32], x0: [f32; 2]) -> f64 {
         let cond = condition(net, enc);
         let (end, ln_det) = Path::default()
@@ -209,13 +238,7 @@ mod tests {
 
     #[test]
     fn reverse_pass_matches_finite_differences() {
-        let def = paper_def(Domain::HalfVector);
-        let mut rng = Pcg64::seed_from_u64(5);
-        let mut net = Mlp::new(&def, Net::Velocity, &mut rng);
-        net.scale_last_layer(2.0);
-        let enc: Vec<f32> = (0..net.inputs() - STATE_INPUTS)
-            .map(|i| (i as f32 * 0.61).cos())
-            .collect();
+        let (net, enc) = test_net(5);
         let x0 = [0.9f32, -0.3];
         let cond = condition(&net, &enc);
         let mut path = Path::default();
@@ -224,19 +247,7 @@ mod tests {
         let mut cond_grad = vec![0.0f32; cond.len()];
         path.backward(&net, [0.6, -1.7], 0.8, &mut grad, &mut cond_grad);
         condition_backward(&net, &enc, &cond_grad, &mut grad);
-        let eps = 1e-2f32;
-        for k in (0..grad.len()).step_by(5) {
-            let (mut plus, mut minus) = (net.clone(), net.clone());
-            plus.params_mut()[k] += eps;
-            minus.params_mut()[k] -= eps;
-            let fd =
-                (objective(&plus, &enc, x0) - objective(&minus, &enc, x0)) / (2.0 * eps as f64);
-            let g = grad[k] as f64;
-            assert!(
-                (fd - g).abs() < 3e-3 * (1.0 + g.abs()),
-                "param {k}: {g} vs {fd}"
-            );
-        }
+        check_gradient(&net, &grad, |n| objective(n, &enc, x0));
     }
 
     /// `ln p(end)` with `ln p0(x0) = -|x0|^2 / 2` through the inverse.
@@ -250,13 +261,7 @@ mod tests {
 
     #[test]
     fn inverse_returns_the_start_and_its_density_gradient_matches_finite_differences() {
-        let def = paper_def(Domain::HalfVector);
-        let mut rng = Pcg64::seed_from_u64(9);
-        let mut net = Mlp::new(&def, Net::Velocity, &mut rng);
-        net.scale_last_layer(2.0);
-        let enc: Vec<f32> = (0..net.inputs() - STATE_INPUTS)
-            .map(|i| (i as f32 * 0.29).sin())
-            .collect();
+        let (net, enc) = test_net(9);
         let cond = condition(&net, &enc);
         let x0 = [-0.7f32, 0.45];
         let mut path = Path::default();
@@ -274,17 +279,6 @@ mod tests {
         path.fixed_end_backward(&net, [-back[0], -back[1]], 1.0, &mut grad, &mut cond_grad)
             .expect("a regular path");
         condition_backward(&net, &enc, &cond_grad, &mut grad);
-        let eps = 1e-2f32;
-        for k in (0..grad.len()).step_by(5) {
-            let (mut plus, mut minus) = (net.clone(), net.clone());
-            plus.params_mut()[k] += eps;
-            minus.params_mut()[k] -= eps;
-            let fd = (density(&plus, &enc, end) - density(&minus, &enc, end)) / (2.0 * eps as f64);
-            let g = grad[k] as f64;
-            assert!(
-                (fd - g).abs() < 3e-3 * (1.0 + g.abs()),
-                "param {k}: {g} vs {fd}"
-            );
-        }
+        check_gradient(&net, &grad, |n| density(n, &enc, end));
     }
 }
