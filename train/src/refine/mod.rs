@@ -181,6 +181,11 @@ fn draw_incidence(def: &ModelDef, rng: &mut Pcg64) -> Vec3 {
     } else {
         std::f32::consts::TAU * rng.gen::<f32>()
     };
+    incidence(theta, phi)
+}
+
+/// The unit `wi` at polar angle `theta` and azimuth `phi`.
+fn incidence(theta: f32, phi: f32) -> Vec3 {
     Vec3::new(
         theta.sin() * phi.cos(),
         theta.sin() * phi.sin(),
@@ -217,11 +222,7 @@ fn validation_loss(def: &ModelDef, nets: &Nets, material: &dyn Material) -> f64 
         .map(|k| {
             let theta = THETA_MAX * (k as f32 + 0.5) / VALIDATION_INCIDENCES as f32;
             let phi = if def.isotropic { 0.0 } else { 2.4 * k as f32 };
-            let wi = Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.sin() * phi.sin(),
-                theta.cos(),
-            );
+            let wi = incidence(theta, phi);
             let seed = 0x7a11_da7e ^ k as u64;
             let cfg = RefineConfig {
                 samples: VALIDATION_SAMPLES,
@@ -319,7 +320,7 @@ fn incidence_loss(
         let Some((end, _)) = path.run(net, &cond, *y0, steps) else {
             continue;
         };
-        let Some((_, g)) = inc.ln_target_gradient(end) else {
+        let Some(g) = inc.ln_target_gradient(end) else {
             continue;
         };
         path.backward(net, [c * g[0], c * g[1]], c, &mut grad, &mut cond_grad);

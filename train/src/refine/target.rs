@@ -105,11 +105,10 @@ impl Incidence<'_> {
         })
     }
 
-    /// `ln q(y)` and its gradient by central differences; `None` where any of the five
-    /// points is outside the target's support.
-    pub(super) fn ln_target_gradient(&self, y: [f32; 2]) -> Option<(f64, [f32; 2])> {
+    /// `grad ln q(y)` by central differences (the sample's `ln q(y)` itself is known);
+    /// `None` where any of the four points is outside the target's support.
+    pub(super) fn ln_target_gradient(&self, y: [f32; 2]) -> Option<[f32; 2]> {
         let step = self.step();
-        let centre = self.ln_target(y)?;
         let mut gradient = [0.0f32; 2];
         for (j, g) in gradient.iter_mut().enumerate() {
             let (mut plus, mut minus) = (y, y);
@@ -119,6 +118,6 @@ impl Incidence<'_> {
             let taken = f64::from(plus[j]) - f64::from(minus[j]);
             *g = ((self.ln_target(plus)? - self.ln_target(minus)?) / taken) as f32;
         }
-        Some((centre, gradient))
+        Some(gradient)
     }
 }
