@@ -306,7 +306,7 @@ pub fn fit_material(
     let data = TrainingSet::from_source(cfg.domain(), cfg.freqs(), &source);
     progress.advance(cfg.pairs as u64, None);
     let mut fitted = fit_data(&data, name, cfg, progress)?;
-    if cfg.refine.iters > 0 && crate::refine::supports(fitted.model.def()) {
+    if cfg.refine.iters > 0 {
         let t = Instant::now();
         let (model, what) = refine(&fitted.model, material, &cfg.refine, cfg.seed, progress)?;
         progress.finish();

@@ -162,9 +162,9 @@ pub struct FitArgs {
     /// Train the student only at its Euler times k/N.
     #[arg(long)]
     pub euler_times: bool,
-    /// Iterations of the variance refinement of the student against the material (disk
-    /// and half-vector chart; docs/math.md section 11): 0 skips it (the fits before
-    /// 2026-12-05). Default: 300 with the standard recipe, 0 with --quick and --tiny.
+    /// Iterations of the variance refinement of the student against the material
+    /// (docs/math.md section 11): 0 skips it (the fits before 2026-12-05). Default: 600
+    /// with the standard recipe, 0 with --quick and --tiny.
     #[arg(long)]
     pub refine_iters: Option<usize>,
     /// Coordinates of the flow on the disk and the half-vector chart: the base

@@ -5,15 +5,19 @@
 
 use super::net::{backward, forward, Tape};
 use crate::mlp::Mlp;
+use diffbsdf::Domain;
 
 /// Newton iterations per step of [`Path::invert`].
 const INVERSE_ITERATIONS: usize = 12;
 /// Newton stops when its update is at most this times `1 + |x|`.
 const INVERSE_TOL: f32 = 1e-6;
 
-/// One trajectory's points, Jacobians and tapes.
-#[derive(Clone, Debug, Default)]
+/// One trajectory's points, Jacobians and tapes, on one chart (whose `advance` and
+/// `difference` wrap `phi` on the sphere, as the kernel's steps do; a wrap moves a
+/// point by a constant, so it leaves every derivative unchanged).
+#[derive(Clone, Debug)]
 pub(super) struct Path {
+    domain: Domain,
     tapes: Vec<Tape>,
     points: Vec<[f32; 2]>,
     jacobians: Vec<[[f32; 2]; 2]>,
@@ -25,6 +29,16 @@ fn step_det(h: f32, j: &[[f32; 2]; 2]) -> f32 {
 }
 
 impl Path {
+    /// An empty path on `domain`'s chart.
+    pub(super) fn new(domain: Domain) -> Path {
+        Path {
+            domain,
+            tapes: Vec::new(),
+            points: Vec::new(),
+            jacobians: Vec::new(),
+        }
+    }
+
     /// Runs `steps` Euler steps from `x0`: the end point and `sum_k ln det(I + h J_k)`;
     /// `None` where a step folds (`det <= 0`) or leaves the finite numbers.
     pub(super) fn run(
@@ -38,9 +52,10 @@ impl Path {
         self.tapes.resize(steps, Tape::default());
         self.points.clear();
         self.jacobians.clear();
-        let (mut x, mut ln_det) = (x0, 0.0f64);
+        let domain = self.domain;
+        let (mut x, mut ln_det) = (domain.advance(x0, [0.0, 0.0]), 0.0f64);
         for k in 0..steps {
-            let (v, j) = forward(net, cond, x, k as f32 * h, &mut self.tapes[k]);
+            let (v, j) = forward(domain, net, cond, x, k as f32 * h, &mut self.tapes[k]);
             let det = step_det(h, &j);
             if !(det > 0.0) {
                 return None;
@@ -48,7 +63,7 @@ impl Path {
             ln_det += f64::from(det).ln();
             self.points.push(x);
             self.jacobians.push(j);
-            x = [x[0] + h * v[0], x[1] + h * v[1]];
+            x = domain.advance(x, [h * v[0], h * v[1]]);
         }
         (x[0].is_finite() && x[1].is_finite() && ln_det.is_finite()).then_some((x, ln_det))
     }
@@ -64,26 +79,27 @@ impl Path {
         steps: usize,
     ) -> Option<([f32; 2], f64)> {
         let h = 1.0 / steps as f32;
+        let domain = self.domain;
         self.tapes.resize(steps.max(1), Tape::default());
-        let mut y = end;
+        let mut y = domain.advance(end, [0.0, 0.0]);
         for k in (0..steps).rev() {
             let t = k as f32 * h;
-            let (v, _) = forward(net, cond, y, t, &mut self.tapes[0]);
-            let mut x = [y[0] - h * v[0], y[1] - h * v[1]];
+            let (v, _) = forward(domain, net, cond, y, t, &mut self.tapes[0]);
+            let mut x = domain.advance(y, [-h * v[0], -h * v[1]]);
             let mut converged = false;
             for _ in 0..INVERSE_ITERATIONS {
-                let (v, j) = forward(net, cond, x, t, &mut self.tapes[0]);
+                let (v, j) = forward(domain, net, cond, x, t, &mut self.tapes[0]);
                 let det = step_det(h, &j);
                 if !(det > 0.0) {
                     return None;
                 }
                 // x <- x - (I + h J)^-1 (x + h v - y)
-                let r = [x[0] + h * v[0] - y[0], x[1] + h * v[1] - y[1]];
+                let r = domain.difference(domain.advance(x, [h * v[0], h * v[1]]), y);
                 let d = [
                     ((1.0 + h * j[1][1]) * r[0] - h * j[0][1] * r[1]) / det,
                     ((1.0 + h * j[0][0]) * r[1] - h * j[1][0] * r[0]) / det,
                 ];
-                x = [x[0] - d[0], x[1] - d[1]];
+                x = domain.advance(x, [-d[0], -d[1]]);
                 if d[0].abs().max(d[1].abs()) <= INVERSE_TOL * (1.0 + x[0].abs().max(x[1].abs())) {
                     converged = true;
                     break;
@@ -95,7 +111,8 @@ impl Path {
             y = x;
         }
         let (again, ln_det) = self.run(net, cond, y, steps)?;
-        let miss = (again[0] - end[0]).abs().max((again[1] - end[1]).abs());
+        let miss = domain.difference(again, end);
+        let miss = miss[0].abs().max(miss[1].abs());
         (miss <= 1e-4 * (1.0 + end[0].abs().max(end[1].abs()))).then_some((y, ln_det))
     }
 
@@ -174,15 +191,7 @@ impl Path {
             // d ln det(A) / dJ = h A^-T
             let j_bar = [[s * a[1][1], -s * a[1][0]], [-s * a[0][1], s * a[0][0]]];
             let v_bar = [h * x_bar[0], h * x_bar[1]];
-            let through_net = backward(
-                net,
-                &self.tapes[k],
-                self.points[k],
-                k as f32 * h,
-                (v_bar, j_bar),
-                grad,
-                cond_grad,
-            );
+            let through_net = backward(net, &self.tapes[k], (v_bar, j_bar), grad, cond_grad);
             // x_{k+1} = x_k + h v(x_k): the identity plus the net's share
             x_bar = [x_bar[0] + through_net[0], x_bar[1] + through_net[1]];
         }
@@ -192,21 +201,24 @@ impl Path {
 
 #[cfg(test)]
 mod tests {
-    use super::super::net::{condition, condition_backward, STATE_INPUTS};
+    use super::super::net::{condition, condition_backward, state_inputs};
     use super::*;
     use crate::pipeline::paper_def;
     use diffbsdf::{Domain, Net};
     use rand::SeedableRng;
     use rand_pcg::Pcg64;
 
-    /// A random half-vector student with a readout large enough to bend the paths, and a
+    /// The two kinds of chart: flat (features `x`) and spherical (wrapped `phi`).
+    const DOMAINS: [Domain; 2] = [Domain::HalfVector, Domain::Sphere];
+
+    /// A random student on `domain` with a readout large enough to bend the paths, and a
     /// fixed `wi` encoding.
-    fn test_net(seed: u64) -> (Mlp, Vec<f32>) {
-        let def = paper_def(Domain::HalfVector);
+    fn test_net(domain: Domain, seed: u64) -> (Mlp, Vec<f32>) {
+        let def = paper_def(domain);
         let mut rng = Pcg64::seed_from_u64(seed);
         let mut net = Mlp::new(&def, Net::Velocity, &mut rng);
         net.scale_last_layer(2.0);
-        let enc = (0..net.inputs() - STATE_INPUTS)
+        let enc = (0..net.inputs() - state_inputs(domain))
             .map(|i| (i as f32 * 0.61 + seed as f32).cos())
             .collect();
         (net, enc)
@@ -228,9 +240,9 @@ mod tests {
         }
     }
 
-    fn objective(net: &Mlp, enc: &[f32], x0: [f32; 2]) -> f64 {
-        let cond = condition(net, enc);
-        let (end, ln_det) = Path::default()
+    fn objective(domain: Domain, net: &Mlp, enc: &[f32], x0: [f32; 2]) -> f64 {
+        let cond = condition(domain, net, enc);
+        let (end, ln_det) = Path::new(domain)
             .run(net, &cond, x0, 4)
             .expect("an unfolded path");
         0.6 * end[0] as f64 - 1.7 * end[1] as f64 + 0.8 * ln_det
@@ -238,22 +250,24 @@ mod tests {
 
     #[test]
     fn reverse_pass_matches_finite_differences() {
-        let (net, enc) = test_net(5);
-        let x0 = [0.9f32, -0.3];
-        let cond = condition(&net, &enc);
-        let mut path = Path::default();
-        path.run(&net, &cond, x0, 4).expect("an unfolded path");
-        let mut grad = vec![0.0f32; net.params().len()];
-        let mut cond_grad = vec![0.0f32; cond.len()];
-        path.backward(&net, [0.6, -1.7], 0.8, &mut grad, &mut cond_grad);
-        condition_backward(&net, &enc, &cond_grad, &mut grad);
-        check_gradient(&net, &grad, |n| objective(n, &enc, x0));
+        for domain in DOMAINS {
+            let (net, enc) = test_net(domain, 5);
+            let x0 = [0.9f32, -0.3];
+            let cond = condition(domain, &net, &enc);
+            let mut path = Path::new(domain);
+            path.run(&net, &cond, x0, 4).expect("an unfolded path");
+            let mut grad = vec![0.0f32; net.params().len()];
+            let mut cond_grad = vec![0.0f32; cond.len()];
+            path.backward(&net, [0.6, -1.7], 0.8, &mut grad, &mut cond_grad);
+            condition_backward(domain, &net, &enc, &cond_grad, &mut grad);
+            check_gradient(&net, &grad, |n| objective(domain, n, &enc, x0));
+        }
     }
 
     /// `ln p(end)` with `ln p0(x0) = -|x0|^2 / 2` through the inverse.
-    fn density(net: &Mlp, enc: &[f32], end: [f32; 2]) -> f64 {
-        let cond = condition(net, enc);
-        let (x0, ln_det) = Path::default()
+    fn density(domain: Domain, net: &Mlp, enc: &[f32], end: [f32; 2]) -> f64 {
+        let cond = condition(domain, net, enc);
+        let (x0, ln_det) = Path::new(domain)
             .invert(net, &cond, end, 4)
             .expect("an invertible path");
         -0.5 * (x0[0] as f64 * x0[0] as f64 + x0[1] as f64 * x0[1] as f64) - ln_det
@@ -261,24 +275,30 @@ mod tests {
 
     #[test]
     fn inverse_returns_the_start_and_its_density_gradient_matches_finite_differences() {
-        let (net, enc) = test_net(9);
-        let cond = condition(&net, &enc);
-        let x0 = [-0.7f32, 0.45];
-        let mut path = Path::default();
+        for domain in DOMAINS {
+            inverse_on(domain);
+        }
+    }
+
+    fn inverse_on(domain: Domain) {
+        let (net, enc) = test_net(domain, 9);
+        let cond = condition(domain, &net, &enc);
+        let x0 = [0.7f32, 0.45];
+        let mut path = Path::new(domain);
         let (end, ln_det) = path.run(&net, &cond, x0, 4).expect("an unfolded path");
         let (back, ln_det_back) = path
             .invert(&net, &cond, end, 4)
             .expect("an invertible path");
         assert!(
             (back[0] - x0[0]).abs() < 1e-5 && (back[1] - x0[1]).abs() < 1e-5,
-            "{back:?}"
+            "{domain:?}: {back:?}"
         );
         assert!((ln_det - ln_det_back).abs() < 1e-5);
         let mut grad = vec![0.0f32; net.params().len()];
         let mut cond_grad = vec![0.0f32; cond.len()];
         path.fixed_end_backward(&net, [-back[0], -back[1]], 1.0, &mut grad, &mut cond_grad)
             .expect("a regular path");
-        condition_backward(&net, &enc, &cond_grad, &mut grad);
-        check_gradient(&net, &grad, |n| density(n, &enc, end));
+        condition_backward(domain, &net, &enc, &cond_grad, &mut grad);
+        check_gradient(&net, &grad, |n| density(domain, n, &enc, end));
     }
 }
