@@ -28,6 +28,7 @@ pub mod error;
 pub mod export;
 pub mod features;
 pub mod flow_fit;
+mod lanes;
 pub mod metrics;
 pub mod mlp;
 pub mod pipeline;

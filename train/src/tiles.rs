@@ -14,10 +14,11 @@
 //! A tile holds `R` rows (or outputs) times `C` vectors of 8 in registers: per step it loads
 //! `C` vectors and `R` broadcasts for `R C` multiply-adds, so the loads no longer bound it.
 
+#[cfg(target_arch = "x86_64")]
+use crate::lanes::Avx;
+use crate::lanes::{Lanes, Portable, LANES};
 use crate::mlp::LayerAt;
 
-/// Floats per vector: one per partial sum of the kernel's dot product.
-pub(crate) const LANES: usize = diffbsdf::spec::DOT_PARTIAL_SUMS;
 // The reduction below names the eight partial sums.
 const _: () = assert!(LANES == 8);
 /// Rows (outputs, for the weight gradient) per register tile.
@@ -25,56 +26,9 @@ const TILE_ROWS: usize = 6;
 /// Vectors of 8 per register tile.
 const TILE_VECS: usize = 2;
 
-/// [`LANES`] floats that travel together: one AVX register, or two SSE registers.
-#[derive(Clone, Copy, Debug)]
-struct Lanes([f32; LANES]);
-
-impl Lanes {
-    const ZERO: Lanes = Lanes([0.0; LANES]);
-
-    /// The first [`LANES`] entries of `v`.
-    #[inline(always)]
-    fn load(v: &[f32]) -> Lanes {
-        let mut out = [0.0; LANES];
-        out.copy_from_slice(&v[..LANES]);
-        Lanes(out)
-    }
-
-    /// `x` in every lane.
-    #[inline(always)]
-    fn splat(x: f32) -> Lanes {
-        Lanes([x; LANES])
-    }
-
-    /// `self + a b`, lane by lane, rounded twice (no fused multiply-add).
-    #[inline(always)]
-    fn add_product(self, a: Lanes, b: Lanes) -> Lanes {
-        let mut out = self.0;
-        for ((o, x), y) in out.iter_mut().zip(a.0).zip(b.0) {
-            *o += x * y;
-        }
-        Lanes(out)
-    }
-
-    /// `self + other`, lane by lane.
-    #[inline(always)]
-    fn add(self, other: Lanes) -> Lanes {
-        let mut out = self.0;
-        for (o, y) in out.iter_mut().zip(other.0) {
-            *o += y;
-        }
-        Lanes(out)
-    }
-
-    /// Writes the lanes to the first [`LANES`] entries of `v`.
-    #[inline(always)]
-    fn store(self, v: &mut [f32]) {
-        v[..LANES].copy_from_slice(&self.0);
-    }
-}
-
-/// Defines `$name` (safe, dispatching) over `$body`, an `#[inline(always)]` function
-/// compiled once as is and once inside an AVX2 function.
+/// Defines `$name` (safe, dispatching) over `$body`, an `#[inline(always)]` function generic
+/// in its [`Lanes`]: compiled once with [`Portable`] lanes for the build's target and once
+/// with [`Avx`] lanes inside an AVX2 function.
 macro_rules! dispatched {
     ($(#[$doc:meta])* fn $name:ident / $avx2:ident = $body:ident($($arg:ident: $ty:ty),*)) => {
         $(#[$doc])*
@@ -86,13 +40,13 @@ macro_rules! dispatched {
                 unsafe { $avx2($($arg),*) };
                 return;
             }
-            $body($($arg),*)
+            $body::<Portable>($($arg),*)
         }
 
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
         fn $avx2($($arg: $ty),*) {
-            $body($($arg),*)
+            $body::<Avx>($($arg),*)
         }
     };
 }
@@ -166,16 +120,21 @@ fn for_each_tile(rows: usize, vecs: usize, mut run: impl FnMut(Shape, usize, usi
 }
 
 #[inline(always)]
-fn affine_body(params: &[f32], at: LayerAt, wt: &[f32], a: &[f32], z: &mut [f32]) {
+fn affine_body<V: Lanes>(params: &[f32], at: LayerAt, wt: &[f32], a: &[f32], z: &mut [f32]) {
     let (n_in, n_out) = (at.n_in, at.n_out);
     let b = &params[at.b..at.b + n_out];
     let rows = a.len() / n_in.max(1);
     let blocks = n_out.div_ceil(LANES);
-    for_each_tile(rows, blocks, |shape, r, k| match shape {
-        Shape::Full => affine_tile::<TILE_ROWS, TILE_VECS>(b, wt, n_in, n_out, a, z, r, k),
-        Shape::Narrow => affine_tile::<TILE_ROWS, 1>(b, wt, n_in, n_out, a, z, r, k),
-        Shape::Single => affine_tile::<1, 1>(b, wt, n_in, n_out, a, z, r, k),
-    });
+    for_each_tile(
+        rows,
+        blocks,
+        #[inline(always)]
+        |shape, r, k| match shape {
+            Shape::Full => affine_tile::<V, TILE_ROWS, TILE_VECS>(b, wt, n_in, n_out, a, z, r, k),
+            Shape::Narrow => affine_tile::<V, TILE_ROWS, 1>(b, wt, n_in, n_out, a, z, r, k),
+            Shape::Single => affine_tile::<V, 1, 1>(b, wt, n_in, n_out, a, z, r, k),
+        },
+    );
 }
 
 /// A row's inputs `8 j + l` as `[j][l]`, and its last inputs (fewer than 8).
@@ -188,7 +147,7 @@ type BlockChunks<'a> = (&'a [[[f32; LANES]; LANES]], &'a [[f32; LANES]]);
 /// `dot` in turn, in registers, then the reduction.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn affine_tile<const R: usize, const C: usize>(
+fn affine_tile<V: Lanes, const R: usize, const C: usize>(
     b: &[f32],
     wt: &[f32],
     n_in: usize,
@@ -212,7 +171,7 @@ fn affine_tile<const R: usize, const C: usize>(
     });
     // The partial sums in the order of `dot`'s reduction, each combined as soon as its
     // pair is done: ((s0 + s4) + (s2 + s6)) + ((s1 + s5) + (s3 + s7)).
-    let sum = |l: usize| partial_sums::<R, C>(&rows, &blocks, full, l);
+    let sum = |l: usize| partial_sums::<V, R, C>(&rows, &blocks, full, l);
     let left = pair_add(pair_add(sum(0), sum(4)), pair_add(sum(2), sum(6)));
     let right = pair_add(pair_add(sum(1), sum(5)), pair_add(sum(3), sum(7)));
     let total = pair_add(left, right);
@@ -222,7 +181,7 @@ fn affine_tile<const R: usize, const C: usize>(
             let last = (first + LANES).min(n_out);
             let z_row = &mut z[(r0 + rr) * n_out..];
             for o in first..last {
-                z_row[o] = b[o] + sums.0[o - first];
+                z_row[o] = b[o] + sums.to_array()[o - first];
             }
         }
     }
@@ -231,20 +190,20 @@ fn affine_tile<const R: usize, const C: usize>(
 /// Partial sum `l` of `dot` (the inputs `8 j + l`, in order) for a tile of rows and
 /// output blocks.
 #[inline(always)]
-fn partial_sums<const R: usize, const C: usize>(
+fn partial_sums<V: Lanes, const R: usize, const C: usize>(
     rows: &[RowChunks; R],
     blocks: &[BlockChunks; C],
     full: usize,
     l: usize,
-) -> [[Lanes; C]; R] {
-    let mut acc = [[Lanes::ZERO; C]; R];
+) -> [[V; C]; R] {
+    let mut acc = [[V::zero(); C]; R];
     for j in 0..full {
-        let mut w = [Lanes::ZERO; C];
+        let mut w = [V::zero(); C];
         for (wc, block) in w.iter_mut().zip(blocks) {
-            *wc = Lanes(block.0[j][l]);
+            *wc = V::load(&block.0[j][l]);
         }
         for (acc_r, row) in acc.iter_mut().zip(rows) {
-            let x = Lanes::splat(row.0[j][l]);
+            let x = V::splat(row.0[j][l]);
             for (acc_rc, wc) in acc_r.iter_mut().zip(w) {
                 *acc_rc = acc_rc.add_product(x, wc);
             }
@@ -255,7 +214,7 @@ fn partial_sums<const R: usize, const C: usize>(
         if let Some(&x) = row.1.get(l) {
             for (acc_rc, block) in acc_r.iter_mut().zip(blocks) {
                 if let Some(&w) = block.1.get(l) {
-                    *acc_rc = acc_rc.add_product(Lanes::splat(x), Lanes(w));
+                    *acc_rc = acc_rc.add_product(V::splat(x), V::load(&w));
                 }
             }
         }
@@ -265,10 +224,10 @@ fn partial_sums<const R: usize, const C: usize>(
 
 /// `a + b`, tile by tile.
 #[inline(always)]
-fn pair_add<const R: usize, const C: usize>(
-    a: [[Lanes; C]; R],
-    b: [[Lanes; C]; R],
-) -> [[Lanes; C]; R] {
+fn pair_add<V: Lanes, const R: usize, const C: usize>(
+    a: [[V; C]; R],
+    b: [[V; C]; R],
+) -> [[V; C]; R] {
     let mut sum = a;
     for (sum_r, b_r) in sum.iter_mut().zip(b) {
         for (s, bv) in sum_r.iter_mut().zip(b_r) {
@@ -279,7 +238,7 @@ fn pair_add<const R: usize, const C: usize>(
 }
 
 #[inline(always)]
-fn weight_grad_body(dz: &[f32], a: &[f32], at: LayerAt, rows: usize, grad: &mut [f32]) {
+fn weight_grad_body<V: Lanes>(dz: &[f32], a: &[f32], at: LayerAt, rows: usize, grad: &mut [f32]) {
     let (n_in, n_out) = (at.n_in, at.n_out);
     let gw = &mut grad[at.w..at.b];
     let full = n_in - n_in % LANES;
@@ -290,20 +249,25 @@ fn weight_grad_body(dz: &[f32], a: &[f32], at: LayerAt, rows: usize, grad: &mut 
         n_out,
         rows,
     };
-    for_each_tile(n_out, full / LANES, |shape, o, v| {
-        let c = v * LANES;
-        match shape {
-            Shape::Full => grad_tile::<TILE_ROWS, TILE_VECS>(op, gw, o, c),
-            Shape::Narrow => grad_tile::<TILE_ROWS, 1>(op, gw, o, c),
-            Shape::Single => grad_tile::<1, 1>(op, gw, o, c),
-        }
-    });
+    for_each_tile(
+        n_out,
+        full / LANES,
+        #[inline(always)]
+        |shape, o, v| {
+            let c = v * LANES;
+            match shape {
+                Shape::Full => grad_tile::<V, TILE_ROWS, TILE_VECS>(op, gw, o, c),
+                Shape::Narrow => grad_tile::<V, TILE_ROWS, 1>(op, gw, o, c),
+                Shape::Single => grad_tile::<V, 1, 1>(op, gw, o, c),
+            }
+        },
+    );
     // The last inputs (fewer than a vector): eight outputs at a time down the rows, then
     // the last outputs one entry at a time; rows in order.
     let mut o = 0;
     while o + LANES <= n_out {
         for i in full..n_in {
-            grad_column(op, gw, o, i);
+            grad_column::<V>(op, gw, o, i);
         }
         o += LANES;
     }
@@ -330,16 +294,14 @@ struct GradOperands<'a> {
 
 /// Outputs `o0..o0 + 8` at input `i` of [`weight_grad`], in one register across the rows.
 #[inline(always)]
-fn grad_column(op: GradOperands, gw: &mut [f32], o0: usize, i: usize) {
+fn grad_column<V: Lanes>(op: GradOperands, gw: &mut [f32], o0: usize, i: usize) {
     let (dz, a, n_in, n_out, rows) = (op.dz, op.a, op.n_in, op.n_out, op.rows);
-    let mut acc = Lanes::ZERO;
-    for (k, g) in acc.0.iter_mut().enumerate() {
-        *g = gw[(o0 + k) * n_in + i];
-    }
+    let start: [f32; LANES] = core::array::from_fn(|k| gw[(o0 + k) * n_in + i]);
+    let mut acc = V::load(&start);
     for (dz_row, a_row) in dz.chunks_exact(n_out).zip(a.chunks_exact(n_in)).take(rows) {
-        acc = acc.add_product(Lanes::load(&dz_row[o0..]), Lanes::splat(a_row[i]));
+        acc = acc.add_product(V::load(&dz_row[o0..]), V::splat(a_row[i]));
     }
-    for (k, g) in acc.0.iter().enumerate() {
+    for (k, g) in acc.to_array().iter().enumerate() {
         gw[(o0 + k) * n_in + i] = *g;
     }
 }
@@ -347,28 +309,28 @@ fn grad_column(op: GradOperands, gw: &mut [f32], o0: usize, i: usize) {
 /// Outputs `o0..o0 + R`, inputs `c0..c0 + 8 C` of [`weight_grad`], in registers across the
 /// rows.
 #[inline(always)]
-fn grad_tile<const R: usize, const C: usize>(
+fn grad_tile<V: Lanes, const R: usize, const C: usize>(
     op: GradOperands,
     gw: &mut [f32],
     o0: usize,
     c0: usize,
 ) {
     let (dz, a, n_in, n_out, rows) = (op.dz, op.a, op.n_in, op.n_out, op.rows);
-    let mut acc = [[Lanes::ZERO; C]; R];
+    let mut acc = [[V::zero(); C]; R];
     for (j, acc_j) in acc.iter_mut().enumerate() {
         for (c, acc_jc) in acc_j.iter_mut().enumerate() {
-            *acc_jc = Lanes::load(&gw[(o0 + j) * n_in + c0 + c * LANES..]);
+            *acc_jc = V::load(&gw[(o0 + j) * n_in + c0 + c * LANES..]);
         }
     }
     for r in 0..rows {
         let a_row = &a[r * n_in + c0..];
-        let mut av = [Lanes::ZERO; C];
+        let mut av = [V::zero(); C];
         for (c, avc) in av.iter_mut().enumerate() {
-            *avc = Lanes::load(&a_row[c * LANES..]);
+            *avc = V::load(&a_row[c * LANES..]);
         }
         let d = &dz[r * n_out + o0..r * n_out + o0 + R];
         for (acc_j, &dj) in acc.iter_mut().zip(d) {
-            let dv = Lanes::splat(dj);
+            let dv = V::splat(dj);
             for (acc_jc, avc) in acc_j.iter_mut().zip(av) {
                 *acc_jc = acc_jc.add_product(avc, dv);
             }
@@ -382,18 +344,29 @@ fn grad_tile<const R: usize, const C: usize>(
 }
 
 #[inline(always)]
-fn transpose_times_body(params: &[f32], at: LayerAt, dz: &[f32], rows: usize, da: &mut [f32]) {
+fn transpose_times_body<V: Lanes>(
+    params: &[f32],
+    at: LayerAt,
+    dz: &[f32],
+    rows: usize,
+    da: &mut [f32],
+) {
     let (n_in, n_out) = (at.n_in, at.n_out);
     let w = &params[at.w..at.b];
     let full = n_in - n_in % LANES;
-    for_each_tile(rows, full / LANES, |shape, r, v| {
-        let c = v * LANES;
-        match shape {
-            Shape::Full => times_tile::<TILE_ROWS, TILE_VECS>(w, dz, da, n_in, n_out, r, c),
-            Shape::Narrow => times_tile::<TILE_ROWS, 1>(w, dz, da, n_in, n_out, r, c),
-            Shape::Single => times_tile::<1, 1>(w, dz, da, n_in, n_out, r, c),
-        }
-    });
+    for_each_tile(
+        rows,
+        full / LANES,
+        #[inline(always)]
+        |shape, r, v| {
+            let c = v * LANES;
+            match shape {
+                Shape::Full => times_tile::<V, TILE_ROWS, TILE_VECS>(w, dz, da, n_in, n_out, r, c),
+                Shape::Narrow => times_tile::<V, TILE_ROWS, 1>(w, dz, da, n_in, n_out, r, c),
+                Shape::Single => times_tile::<V, 1, 1>(w, dz, da, n_in, n_out, r, c),
+            }
+        },
+    );
     // The last inputs (fewer than a vector) one entry at a time, outputs in order.
     for k in 0..rows {
         for i in full..n_in {
@@ -409,7 +382,7 @@ fn transpose_times_body(params: &[f32], at: LayerAt, dz: &[f32], rows: usize, da
 /// Rows `r0..r0 + R`, inputs `c0..c0 + 8 C` of [`transpose_times`], in registers across
 /// the outputs.
 #[inline(always)]
-fn times_tile<const R: usize, const C: usize>(
+fn times_tile<V: Lanes, const R: usize, const C: usize>(
     w: &[f32],
     dz: &[f32],
     da: &mut [f32],
@@ -418,15 +391,15 @@ fn times_tile<const R: usize, const C: usize>(
     r0: usize,
     c0: usize,
 ) {
-    let mut acc = [[Lanes::ZERO; C]; R];
+    let mut acc = [[V::zero(); C]; R];
     for o in 0..n_out {
         let w_row = &w[o * n_in + c0..];
-        let mut wv = [Lanes::ZERO; C];
+        let mut wv = [V::zero(); C];
         for (c, wvc) in wv.iter_mut().enumerate() {
-            *wvc = Lanes::load(&w_row[c * LANES..]);
+            *wvc = V::load(&w_row[c * LANES..]);
         }
         for (rr, acc_r) in acc.iter_mut().enumerate() {
-            let dv = Lanes::splat(dz[(r0 + rr) * n_out + o]);
+            let dv = V::splat(dz[(r0 + rr) * n_out + o]);
             for (acc_rc, wc) in acc_r.iter_mut().zip(wv) {
                 *acc_rc = acc_rc.add_product(dv, wc);
             }
@@ -467,17 +440,17 @@ mod tests {
 
             let (mut z1, mut z2) = (vec![0.0; rows * n_out], vec![0.0; rows * n_out]);
             affine(&params, at, &wt, &a, &mut z1);
-            affine_body(&params, at, &wt, &a, &mut z2);
+            affine_body::<Portable>(&params, at, &wt, &a, &mut z2);
             assert_eq!(bits(&z1), bits(&z2), "affine {n_in}x{n_out}");
 
             let (mut g1, mut g2) = (grad0.clone(), grad0.clone());
             weight_grad(&dz, &a, at, rows, &mut g1);
-            weight_grad_body(&dz, &a, at, rows, &mut g2);
+            weight_grad_body::<Portable>(&dz, &a, at, rows, &mut g2);
             assert_eq!(bits(&g1), bits(&g2), "weight gradient {n_in}x{n_out}");
 
             let (mut d1, mut d2) = (vec![0.0; rows * n_in], vec![0.0; rows * n_in]);
             transpose_times(&params, at, &dz, rows, &mut d1);
-            transpose_times_body(&params, at, &dz, rows, &mut d2);
+            transpose_times_body::<Portable>(&params, at, &dz, rows, &mut d2);
             assert_eq!(bits(&d1), bits(&d2), "W^T dz {n_in}x{n_out}");
         }
     }
