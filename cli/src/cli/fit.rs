@@ -163,7 +163,7 @@ pub struct FitArgs {
     #[arg(long)]
     pub euler_times: bool,
     /// Iterations of the variance refinement of the student against the material
-    /// (docs/math.md section 11): 0 skips it (the fits before 2026-12-05). Default: 600
+    /// (docs/math.md section 11): 0 skips it (the fits before 2026-12-05). Default: 900
     /// with the standard recipe, 0 with --quick and --tiny.
     #[arg(long)]
     pub refine_iters: Option<usize>,
