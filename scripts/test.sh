@@ -65,12 +65,15 @@ section "tests";   cargo test --release --workspace
 # suites (normalization 11 min unoptimised, shipped_models, pdf_consistency, isotropy,
 # bijectivity, blob) run in release above. About 80 s measured on 2 busy cores.
 # The kernel with fused multiply-add (the `fma` feature; RUSTFLAGS above target this CPU):
-# every shipped model stays exact, and the property and hard-case suites hold. A CPU
-# without FMA cannot run it, and says so.
+# every shipped model stays exact, and the property and hard-case suites hold; the
+# generated C made to fuse the same multiply-adds agrees with it. A CPU without FMA cannot
+# run it, and says so.
 section "kernel with the fma feature"
 grep -qw fma /proc/cpuinfo || { echo "this CPU has no FMA: the fma feature cannot be tested here"; exit 1; }
 cargo test --release -p diffbsdf --features fma --lib --test shipped_models --test pdf_consistency \
   --test bijectivity --test jacobian --test hard_cases --test robustness
+# and the generated C with its multiply-adds fused (`fused`, `--fma`) against that kernel
+cargo test --release -p diffbsdf-codegen --features diffbsdf/fma --test c_header
 
 section "kernel tests in debug (overflow checks)"
 DIFFBSDF_FUZZ_INPUTS=2000 cargo test -p diffbsdf --lib \

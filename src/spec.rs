@@ -58,6 +58,12 @@ pub const STATUS_NO_SAMPLE: i32 = 1;
 /// without reassociating floats; the trainer's passes rely on this order for their bits.
 pub const DOT_PARTIAL_SUMS: usize = 8;
 
+/// Whether the networks' multiply-adds (the dense layers, their tangents and the
+/// readout's dot products) are fused, rounded once: true in a kernel built with the `fma`
+/// feature, false by default (a product and a sum, each rounded). Generated code made
+/// with `fused` set to this value computes them the same way.
+pub const FUSED_MULTIPLY_ADD: bool = cfg!(feature = "fma");
+
 /// Most Euler steps a call may ask for, and a blob may declare as its default: bounds the
 /// work of one call (a larger count gives an invalid result, a blob declaring one is
 /// rejected). Trained models use 1 to 16.

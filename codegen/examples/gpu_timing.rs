@@ -412,6 +412,7 @@ fn main() {
                             Weights::Buffer { set: 0, binding: 0 }
                         },
                         prefix: Some("dbsdf".into()),
+                        fused: false,
                     };
                     let code = generate(&blob, &options).expect("generate");
                     // The material's offset in the buffer: 0 (it is the only one).

@@ -41,6 +41,11 @@ pub struct CodegenArgs {
     /// Evaluate the networks in f16 (GLSL, WGSL).
     #[arg(long)]
     pub f16: bool,
+    /// Fuse the networks' multiply-adds (`fmaf` / `fma`), as the kernel built with its
+    /// `fma` feature computes them; C callers then compile for a CPU with FMA (`-mfma`),
+    /// where `fmaf` is one instruction.
+    #[arg(long)]
+    pub fma: bool,
     /// Entry points to emit (comma separated); all by default.
     #[arg(long, value_enum, value_delimiter = ',')]
     pub entry: Vec<Entry>,
@@ -120,6 +125,7 @@ impl CodegenArgs {
             };
         }
         o.prefix = self.prefix.clone();
+        o.fused = self.fma;
         o
     }
 }

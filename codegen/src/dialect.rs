@@ -59,6 +59,20 @@ pub trait Dialect {
     fn struct_decl(&self, name: &str, fields: &[(T, &str)]) -> Vec<String>;
     /// Builtin name for `t` (`expf` in C, `exp` elsewhere).
     fn math(&self, f: Math) -> &'static str;
+    /// Whether the networks' multiply-adds are fused ([`crate::Options::fused`]).
+    fn fused(&self) -> bool;
+    /// The fused multiply-add builtin (`fmaf` in C, `fma` elsewhere).
+    fn fma_name(&self) -> &'static str;
+    /// A network multiply-add `c + a * b`: `fma(a, b, c)` when fused (rounded once, as
+    /// the kernel's `math::mul_add` with its `fma` feature), else the sum of the rounded
+    /// product (as the default kernel).
+    fn mad(&self, a: &str, b: &str, c: &str) -> String {
+        if self.fused() {
+            format!("{}({a}, {b}, {c})", self.fma_name())
+        } else {
+            format!("{c} + {a} * {b}")
+        }
+    }
     /// `atan2(y, x)` call.
     fn atan2(&self, y: &str, x: &str) -> String;
     /// `clamp(x, lo, hi)` call.

@@ -119,6 +119,11 @@ pub struct Options {
     pub weights: Weights,
     /// Prefix of every generated name; default `diffbsdf_<model name>`.
     pub prefix: Option<String>,
+    /// The networks' multiply-adds as fused multiply-adds (`fmaf` in C, `fma` in GLSL and
+    /// WGSL), as the kernel built with its `fma` feature computes them
+    /// ([`diffbsdf::spec::FUSED_MULTIPLY_ADD`]); otherwise a product and a sum, each rounded, as the
+    /// default kernel computes them.
+    pub fused: bool,
 }
 
 impl Options {
@@ -130,6 +135,7 @@ impl Options {
             entry_points: EntryPoints::ALL,
             weights: Weights::Baked,
             prefix: None,
+            fused: false,
         }
     }
 }
@@ -241,9 +247,11 @@ pub(crate) fn header_lines(model: &ModelDesc, options: &Options, prefix: &str) -
         ),
         format!(
             "arithmetic {}; weights {}",
-            match options.float {
-                Float::F32 => "f32",
-                Float::F16 => "f16 networks, f32 flow state and densities",
+            match (options.float, options.fused) {
+                (Float::F32, false) => "f32",
+                (Float::F32, true) => "f32, the networks' multiply-adds fused",
+                (Float::F16, false) => "f16 networks, f32 flow state and densities",
+                (Float::F16, true) => "f16 networks (multiply-adds fused), f32 flow state and densities",
             },
             match options.weights {
                 Weights::Baked => "baked in".to_string(),

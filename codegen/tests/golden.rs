@@ -54,7 +54,9 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
         entry_points,
         weights,
         prefix: None,
+        fused: false,
     };
+    let fused = |o: Options| Options { fused: true, ..o };
     let buf = Weights::Buffer { set: 1, binding: 3 };
     let dir_only = EntryPoints {
         direction: true,
@@ -104,8 +106,34 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
         ),
         (
             "half_vector_all_f16.wgsl",
-            half_vector,
+            half_vector.clone(),
             opt(Language::Wgsl, Float::F16, Weights::Baked, EntryPoints::ALL),
+        ),
+        // the networks' multiply-adds fused, as the kernel's `fma` feature computes them
+        (
+            "half_vector_all_fused.h",
+            half_vector.clone(),
+            fused(opt(
+                Language::C,
+                Float::F32,
+                Weights::Baked,
+                EntryPoints::ALL,
+            )),
+        ),
+        (
+            "half_vector_all_fused.glsl",
+            half_vector.clone(),
+            fused(opt(Language::Glsl, Float::F32, buf, EntryPoints::ALL)),
+        ),
+        (
+            "half_vector_all_f16_fused.wgsl",
+            half_vector,
+            fused(opt(
+                Language::Wgsl,
+                Float::F16,
+                Weights::Baked,
+                EntryPoints::ALL,
+            )),
         ),
     ]
 }

@@ -219,6 +219,7 @@ fn run_language(language: Language, float: Float) {
                 entry_points: *e,
                 weights,
                 prefix: Some("dbsdf".into()),
+                fused: diffbsdf::spec::FUSED_MULTIPLY_ADD,
             };
             let code = generate(&first.blob, &o).expect("generate");
             let label = format!("{language:?} {float:?} {e:?}");

@@ -15,13 +15,16 @@ fn all_options(language: Language) -> Vec<Options> {
     for float in [Float::F32, Float::F16] {
         for weights in [Weights::Baked, Weights::Buffer { set: 0, binding: 0 }] {
             for &entry_points in &entries {
-                v.push(Options {
-                    language,
-                    float,
-                    entry_points,
-                    weights,
-                    prefix: Some("dbsdf".into()),
-                });
+                for fused in [false, true] {
+                    v.push(Options {
+                        language,
+                        float,
+                        entry_points,
+                        weights,
+                        prefix: Some("dbsdf".into()),
+                        fused,
+                    });
+                }
             }
         }
     }

@@ -11,6 +11,7 @@ use crate::{float_repr, header_lines, prefix_for, Options, Weights};
 use diffbsdf::spec;
 
 struct C {
+    fused: bool,
     prefix: String,
     buffer: bool,
 }
@@ -84,6 +85,12 @@ impl Dialect for C {
             Math::Max => "fmaxf",
         }
     }
+    fn fused(&self) -> bool {
+        self.fused
+    }
+    fn fma_name(&self) -> &'static str {
+        "fmaf"
+    }
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("atan2f({y}, {x})")
     }
@@ -120,6 +127,7 @@ pub(crate) fn write(model: &ModelDesc, options: &Options) -> String {
     let d = C {
         prefix: prefix.clone(),
         buffer: matches!(options.weights, Weights::Buffer { .. }),
+        fused: options.fused,
     };
     let up = prefix.to_uppercase();
     let mut c = Code::new();

@@ -103,7 +103,8 @@ impl Emitter<'_> {
         } else {
             format!("{input}[i]")
         };
-        self.code.line(format!("z = z + {w} * {x};"));
+        let mad = self.d.mad(&w, &x, "z");
+        self.code.line(format!("z = {mad};"));
         self.code.close("}");
         let sg = self.call("sigmoid", false, &["z"]);
         self.code.line(format!("{out}[o] = z * {sg};"));
@@ -138,7 +139,8 @@ impl Emitter<'_> {
         self.decl(T::N, "z", &b);
         self.for_open("i", &self.u(ro.inputs));
         let w = self.w(format!("{}u + o * {}u + i", ro.w, ro.inputs));
-        self.code.line(format!("z = z + {w} * {input}[i];"));
+        let mad = self.d.mad(&w, &format!("{input}[i]"), "z");
+        self.code.line(format!("z = {mad};"));
         self.code.close("}");
         self.code.line(format!("outv[o] = {};", self.d.to_f32("z")));
         self.code.close("}");
@@ -168,7 +170,8 @@ impl Emitter<'_> {
         self.for_open("i", &self.u(m.encoding_len()));
         let w = self.w(format!("{}u + o * {}u + {}u + i", v0.w, v0.inputs, skip));
         let x = self.d.to_net("enc.e[i]");
-        self.code.line(format!("z = z + {w} * {x};"));
+        let mad = self.d.mad(&w, &x, "z");
+        self.code.line(format!("z = {mad};"));
         self.code.close("}");
         self.code.line("r.c[o] = z;");
         self.code.close("}");
@@ -182,10 +185,12 @@ impl Emitter<'_> {
         let feats = self.m.features();
         let row = format!("{}u + o * {}u", v0.w, v0.inputs);
         let wt = self.w(format!("{row} + {feats}u"));
-        self.decl(T::N, "z", &format!("cond.c[o] + {wt} * tn"));
+        let mad = self.d.mad(&wt, "tn", "cond.c[o]");
+        self.decl(T::N, "z", &mad);
         for f in 0..feats {
             let wf = self.w(format!("{row} + {f}u"));
-            self.code.line(format!("z = z + {wf} * f{f};"));
+            let mad = self.d.mad(&wf, &format!("f{f}"), "z");
+            self.code.line(format!("z = {mad};"));
         }
     }
 
@@ -226,8 +231,10 @@ impl Emitter<'_> {
         self.for_open("i", &self.u(ro.inputs));
         let w0 = self.w(format!("{}u + i", ro.w));
         let w1 = self.w(format!("{}u + i", ro.w + ro.inputs));
-        self.code.line(format!("v0 = v0 + {w0} * {input}[i];"));
-        self.code.line(format!("v1 = v1 + {w1} * {input}[i];"));
+        let x = format!("{input}[i]");
+        let (m0, m1) = (self.d.mad(&w0, &x, "v0"), self.d.mad(&w1, &x, "v1"));
+        self.code.line(format!("v0 = {m0};"));
+        self.code.line(format!("v1 = {m1};"));
         self.code.close("}");
         let r = self.d.decl(&vec_t, "r", None);
         self.code.line(r);
@@ -279,9 +286,10 @@ impl Emitter<'_> {
             self.for_open("i", &self.u(l.inputs));
             let wi = self.w(format!("{}u + o * {}u + i", l.w, l.inputs));
             self.decl(T::N, "w", &wi);
-            self.code.line(format!("z = z + w * h{k_in}[i];"));
-            self.code.line(format!("ta = ta + w * da{k_in}[i];"));
-            self.code.line(format!("tb = tb + w * db{k_in}[i];"));
+            for (acc, input) in [("z", "h"), ("ta", "da"), ("tb", "db")] {
+                let mad = self.d.mad("w", &format!("{input}{k_in}[i]"), acc);
+                self.code.line(format!("{acc} = {mad};"));
+            }
             self.code.close("}");
             self.slope_store(&k_out.to_string(), "ta", "tb");
             self.code.close("}");
@@ -308,12 +316,17 @@ impl Emitter<'_> {
         self.decl(T::N, "w0", &w0);
         self.decl(T::N, "w1", &w1);
         let k = k_in;
-        self.code.line(format!("v0 = v0 + w0 * h{k}[i];"));
-        self.code.line(format!("v1 = v1 + w1 * h{k}[i];"));
-        self.code.line(format!("j00 = j00 + w0 * da{k}[i];"));
-        self.code.line(format!("j01 = j01 + w0 * db{k}[i];"));
-        self.code.line(format!("j10 = j10 + w1 * da{k}[i];"));
-        self.code.line(format!("j11 = j11 + w1 * db{k}[i];"));
+        for (acc, w, input) in [
+            ("v0", "w0", "h"),
+            ("v1", "w1", "h"),
+            ("j00", "w0", "da"),
+            ("j01", "w0", "db"),
+            ("j10", "w1", "da"),
+            ("j11", "w1", "db"),
+        ] {
+            let mad = self.d.mad(w, &format!("{input}{k}[i]"), acc);
+            self.code.line(format!("{acc} = {mad};"));
+        }
         self.code.close("}");
         let r = self.d.decl(&jac_t, "r", None);
         self.code.line(r);

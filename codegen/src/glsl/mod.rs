@@ -11,6 +11,7 @@ use crate::emit::Emitter;
 use crate::{float_repr, header_lines, prefix_for, Float, Options, Weights};
 
 struct Glsl {
+    fused: bool,
     half: bool,
     prefix: String,
     buffer: bool,
@@ -90,6 +91,12 @@ impl Dialect for Glsl {
             Math::Max => "max",
         }
     }
+    fn fused(&self) -> bool {
+        self.fused
+    }
+    fn fma_name(&self) -> &'static str {
+        "fma"
+    }
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("atan({y}, {x})")
     }
@@ -134,6 +141,7 @@ pub(crate) fn write(model: &ModelDesc, options: &Options) -> String {
         half,
         prefix: prefix.clone(),
         buffer: matches!(options.weights, Weights::Buffer { .. }),
+        fused: options.fused,
     };
     let mut c = Code::new();
     for l in header_lines(model, options, &prefix) {

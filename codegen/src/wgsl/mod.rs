@@ -10,6 +10,7 @@ use crate::emit::Emitter;
 use crate::{float_repr, header_lines, prefix_for, Float, Options, Weights};
 
 struct Wgsl {
+    fused: bool,
     half: bool,
     prefix: String,
     buffer: bool,
@@ -80,6 +81,12 @@ impl Dialect for Wgsl {
             Math::Max => "max",
         }
     }
+    fn fused(&self) -> bool {
+        self.fused
+    }
+    fn fma_name(&self) -> &'static str {
+        "fma"
+    }
     fn atan2(&self, y: &str, x: &str) -> String {
         format!("atan2({y}, {x})")
     }
@@ -124,6 +131,7 @@ pub(crate) fn write(model: &ModelDesc, options: &Options) -> String {
         half,
         prefix: prefix.clone(),
         buffer: matches!(options.weights, Weights::Buffer { .. }),
+        fused: options.fused,
     };
     let mut c = Code::new();
     if half {
