@@ -50,7 +50,9 @@ impl Emitter<'_> {
         let w1 = self.w(format!("{row} + 1u"));
         if self.sphere() {
             let w2 = self.w(format!("{row} + 2u"));
-            self.decl(T::N, "tb", &format!("{w1} * f2 + {w2} * (-f1)"));
+            // w1 f2 + w2 (-f1): the kernel's chain over the features, fused at its last step
+            let mad = self.d.mad(&w2, "(-f1)", &format!("{w1} * f2"));
+            self.decl(T::N, "tb", &mad);
         } else {
             self.decl(T::N, "tb", &w1);
         }
