@@ -18,9 +18,9 @@ fn call(args: &[&str]) -> Vec<u8> {
     buf
 }
 
-fn fit(out: &std::path::Path, refine_iters: &str) -> Value {
+fn fit(out: &std::path::Path, refine_iters: &str, extra: &[&str]) -> Value {
     let out = out.to_str().unwrap();
-    let args = [
+    let mut args = vec![
         "diffbsdf",
         "fit",
         SPEC,
@@ -38,6 +38,7 @@ fn fit(out: &std::path::Path, refine_iters: &str) -> Value {
         "--out",
         out,
     ];
+    args.extend_from_slice(extra);
     serde_json::from_slice(&call(&args)).unwrap()
 }
 
@@ -47,16 +48,27 @@ fn scratch(name: &str) -> std::path::PathBuf {
     dir.join(name)
 }
 
+fn params(m: &AnyModel) -> Vec<f32> {
+    let mut p = vec![0.0f32; 4096];
+    let n = m.params(&mut p).unwrap();
+    p.truncate(n);
+    p
+}
+
+fn blob_params(path: &std::path::Path) -> Vec<f32> {
+    params(&AnyModel::from_blob(&std::fs::read(path).unwrap()).unwrap())
+}
+
 #[test]
 fn refine_command_matches_the_fit_stage() {
     let (plain, fitted) = (scratch("plain.dbsdf"), scratch("fitted.dbsdf"));
-    let without = fit(&plain, "0");
+    let without = fit(&plain, "0", &[]);
     assert!(without["stages"]
         .as_array()
         .unwrap()
         .iter()
         .all(|s| s["stage"] != "refine"));
-    let with = fit(&fitted, "4");
+    let with = fit(&fitted, "4", &[]);
     let stage = with["stages"]
         .as_array()
         .unwrap()
@@ -87,13 +99,35 @@ fn refine_command_matches_the_fit_stage() {
     assert_eq!(ma.def().domain, mb.def().domain);
     assert!(ma.def().standard_warp);
     // Same weights; the stored names differ (each blob's file stem).
-    let params = |m: &AnyModel| {
-        let mut p = vec![0.0f32; 4096];
-        let n = m.params(&mut p).unwrap();
-        p.truncate(n);
-        p
-    };
     assert!(params(&ma) == params(&mb), "the two refinements differ");
     let f16 = refined.with_file_name("refined.f16.dbsdf");
     assert!(AnyModel::from_blob(&bytes(&f16)).is_ok());
+}
+
+#[test]
+fn fit_passes_its_refinement_rate_to_the_stage() {
+    let plain = scratch("plain-lr.dbsdf");
+    fit(&plain, "0", &[]);
+    let (fitted, default_rate) = (scratch("fitted-lr.dbsdf"), scratch("default-lr.dbsdf"));
+    fit(&fitted, "4", &["--refine-lr", "1e-3"]);
+    fit(&default_rate, "4", &[]);
+    let refined = scratch("refined-lr.dbsdf");
+    call(&[
+        "diffbsdf",
+        "refine",
+        plain.to_str().unwrap(),
+        SPEC,
+        "--iters",
+        "4",
+        "--lr",
+        "1e-3",
+        "--out",
+        refined.to_str().unwrap(),
+    ]);
+    let (with_rate, stage) = (blob_params(&fitted), blob_params(&refined));
+    assert!(with_rate == stage, "fit --refine-lr and refine --lr differ");
+    assert!(
+        with_rate != blob_params(&default_rate),
+        "--refine-lr changed nothing"
+    );
 }

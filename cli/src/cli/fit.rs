@@ -167,6 +167,10 @@ pub struct FitArgs {
     /// with the standard recipe, 0 with --quick and --tiny.
     #[arg(long)]
     pub refine_iters: Option<usize>,
+    /// Peak learning rate of the variance refinement (cosine decay to 5 %). Default
+    /// 2e-4 (docs/measured-materials.md, "Variance refinement").
+    #[arg(long)]
+    pub refine_lr: Option<f32>,
     /// Coordinates of the flow on the disk and the half-vector chart: the base
     /// distribution's standard coordinates z = (x - mu) / sigma (docs/math.md, section
     /// 6.3), those compressed by 3 asinh(z / 3) (warped, section 6.4), or the chart's own.
@@ -403,6 +407,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     }
     if let Some(n) = args.refine_iters {
         c.refine.iters = n;
+    }
+    if let Some(lr) = args.refine_lr {
+        c.refine.lr = lr;
     }
     if let Some(lr) = args.student_lr {
         c.student.lr = lr;
