@@ -42,6 +42,22 @@ fn fit(out: &std::path::Path, refine_iters: &str, extra: &[&str]) -> Value {
     serde_json::from_slice(&call(&args)).unwrap()
 }
 
+/// `diffbsdf refine PLAIN SPEC --iters 4 --out OUT EXTRA...`; its text output.
+fn refine_blob(plain: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> Vec<u8> {
+    let mut args = vec![
+        "diffbsdf",
+        "refine",
+        plain.to_str().unwrap(),
+        SPEC,
+        "--iters",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    call(&args)
+}
+
 fn scratch(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("diffbsdf-refine-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -78,17 +94,7 @@ fn refine_command_matches_the_fit_stage() {
     assert!(stage["loss_start"].as_f64().unwrap() > 0.0);
 
     let refined = scratch("refined.dbsdf");
-    let text = call(&[
-        "diffbsdf",
-        "refine",
-        plain.to_str().unwrap(),
-        SPEC,
-        "--iters",
-        "4",
-        "--out",
-        refined.to_str().unwrap(),
-    ]);
-    let text = String::from_utf8(text).unwrap();
+    let text = String::from_utf8(refine_blob(&plain, &refined, &[])).unwrap();
     assert!(text.starts_with("validation mean ln(1 + RV): "), "{text}");
     let bytes = |p: &std::path::Path| std::fs::read(p).unwrap();
     let (a, b) = (bytes(&refined), bytes(&fitted));
@@ -112,18 +118,7 @@ fn fit_passes_its_refinement_rate_to_the_stage() {
     fit(&fitted, "4", &["--refine-lr", "1e-3"]);
     fit(&default_rate, "4", &[]);
     let refined = scratch("refined-lr.dbsdf");
-    call(&[
-        "diffbsdf",
-        "refine",
-        plain.to_str().unwrap(),
-        SPEC,
-        "--iters",
-        "4",
-        "--lr",
-        "1e-3",
-        "--out",
-        refined.to_str().unwrap(),
-    ]);
+    refine_blob(&plain, &refined, &["--lr", "1e-3"]);
     let (with_rate, stage) = (blob_params(&fitted), blob_params(&refined));
     assert!(with_rate == stage, "fit --refine-lr and refine --lr differ");
     assert!(
