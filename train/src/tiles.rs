@@ -58,6 +58,12 @@ dispatched! {
 }
 
 dispatched! {
+    /// `z[r][o] = dot(W[o], a[r])` (the product without the bias: the tangents of a
+    /// layer's input); `wt` as for [`affine`].
+    fn linear / linear_avx2 = linear_body(at: LayerAt, wt: &[f32], a: &[f32], z: &mut [f32])
+}
+
+dispatched! {
     /// `grad_W[o][i] += dz[r][o] a[r][i]` over the rows in order.
     fn weight_grad / weight_grad_avx2 = weight_grad_body(dz: &[f32], a: &[f32], at: LayerAt, rows: usize, grad: &mut [f32])
 }
@@ -121,8 +127,18 @@ fn for_each_tile(rows: usize, vecs: usize, mut run: impl FnMut(Shape, usize, usi
 
 #[inline(always)]
 fn affine_body<V: Lanes>(params: &[f32], at: LayerAt, wt: &[f32], a: &[f32], z: &mut [f32]) {
+    product_body::<V>(Some(&params[at.b..at.b + at.n_out]), at, wt, a, z);
+}
+
+#[inline(always)]
+fn linear_body<V: Lanes>(at: LayerAt, wt: &[f32], a: &[f32], z: &mut [f32]) {
+    product_body::<V>(None, at, wt, a, z);
+}
+
+/// [`affine`] with the bias `b`, [`linear`] without (`None`).
+#[inline(always)]
+fn product_body<V: Lanes>(b: Option<&[f32]>, at: LayerAt, wt: &[f32], a: &[f32], z: &mut [f32]) {
     let (n_in, n_out) = (at.n_in, at.n_out);
-    let b = &params[at.b..at.b + n_out];
     let rows = a.len() / n_in.max(1);
     let blocks = n_out.div_ceil(LANES);
     for_each_tile(
@@ -148,7 +164,7 @@ type BlockChunks<'a> = (&'a [[[f32; LANES]; LANES]], &'a [[f32; LANES]]);
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn affine_tile<V: Lanes, const R: usize, const C: usize>(
-    b: &[f32],
+    b: Option<&[f32]>,
     wt: &[f32],
     n_in: usize,
     n_out: usize,
@@ -180,8 +196,12 @@ fn affine_tile<V: Lanes, const R: usize, const C: usize>(
             let first = (k0 + c) * LANES;
             let last = (first + LANES).min(n_out);
             let z_row = &mut z[(r0 + rr) * n_out..];
+            let sums = sums.to_array();
             for o in first..last {
-                z_row[o] = b[o] + sums.to_array()[o - first];
+                z_row[o] = match b {
+                    Some(b) => b[o] + sums[o - first],
+                    None => sums[o - first],
+                };
             }
         }
     }
@@ -442,6 +462,24 @@ mod tests {
             affine(&params, at, &wt, &a, &mut z1);
             affine_body::<Portable>(&params, at, &wt, &a, &mut z2);
             assert_eq!(bits(&z1), bits(&z2), "affine {n_in}x{n_out}");
+
+            // Without the bias: the dispatched copy, the target's, and `dot` itself.
+            let (mut l1, mut l2) = (vec![0.0; rows * n_out], vec![0.0; rows * n_out]);
+            linear(at, &wt, &a, &mut l1);
+            linear_body::<Portable>(at, &wt, &a, &mut l2);
+            let by_dot: Vec<f32> = (0..rows * n_out)
+                .map(|k| {
+                    let (r, o) = (k / n_out, k % n_out);
+                    let w_row = &params[o * n_in..(o + 1) * n_in];
+                    crate::mlp::dot(w_row, &a[r * n_in..(r + 1) * n_in])
+                })
+                .collect();
+            assert_eq!(bits(&l1), bits(&l2), "linear {n_in}x{n_out}");
+            assert_eq!(
+                bits(&l1),
+                bits(&by_dot),
+                "linear against dot {n_in}x{n_out}"
+            );
 
             let (mut g1, mut g2) = (grad0.clone(), grad0.clone());
             weight_grad(&dz, &a, at, rows, &mut g1);

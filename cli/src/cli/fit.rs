@@ -163,12 +163,13 @@ pub struct FitArgs {
     #[arg(long)]
     pub euler_times: bool,
     /// Iterations of the variance refinement of the student against the material
-    /// (docs/math.md section 11): 0 skips it (the fits before 2026-12-05). Default: 900
+    /// (docs/math.md section 11): 0 skips it (the fits before 2026-12-05). Default: 1800
     /// with the standard recipe, 0 with --quick and --tiny.
     #[arg(long)]
     pub refine_iters: Option<usize>,
     /// Peak learning rate of the variance refinement (cosine decay to 5 %). Default
-    /// 2e-4 (docs/measured-materials.md, "Variance refinement").
+    /// 4e-4 (docs/measured-materials.md, "Twice the peak rate of the refinement"; 2e-4
+    /// before 2026-12-05).
     #[arg(long)]
     pub refine_lr: Option<f32>,
     /// Coordinates of the flow on the disk and the half-vector chart: the base
