@@ -12,7 +12,7 @@
 use crate::mlp::{dot, Mlp};
 use crate::tiles::{affine, linear, transpose};
 use diffbsdf::spec::MAX_FEATURES;
-use diffbsdf::Domain;
+use diffbsdf::{Domain, ModelDef};
 
 /// Inputs of the first layer before the encoding: the state features and `t`.
 pub(super) const fn state_inputs(domain: Domain) -> usize {
@@ -403,8 +403,9 @@ fn layer_backward_body(
     grads: (&mut [f32], &mut [f32]),
     [a_bar, a0_bar, a1_bar]: [&mut [f32]; 3],
 ) {
-    // The student's width as a constant: its input cotangents stay in registers.
-    const WIDTH: usize = 32;
+    // The student's width (the kernel's definition) as a constant: its input cotangents
+    // stay in registers.
+    const WIDTH: usize = ModelDef::paper_disk().velocity.width as usize;
     if a[0].len() == WIDTH {
         let mut sums = [[0.0f32; WIDTH]; 3];
         let [s, s0, s1] = &mut sums;
