@@ -168,10 +168,14 @@ pub struct FitArgs {
     #[arg(long)]
     pub refine_iters: Option<usize>,
     /// Peak learning rate of the variance refinement (cosine decay to 5 %). Default
-    /// 4e-4 (docs/measured-materials.md, "Twice the peak rate of the refinement"; 2e-4
-    /// before 2026-12-05).
+    /// 8e-4 (docs/measured-materials.md, "Twice the peak rate again"; 4e-4 until
+    /// 2026-12-06, 2e-4 before 2026-12-05).
     #[arg(long)]
     pub refine_lr: Option<f32>,
+    /// Share of the variance refinement's incidences drawn from the grazing band (60 to
+    /// 89.5 degrees) instead of the whole range. Default 0.
+    #[arg(long)]
+    pub refine_grazing: Option<f32>,
     /// Coordinates of the flow on the disk and the half-vector chart: the base
     /// distribution's standard coordinates z = (x - mu) / sigma (docs/math.md, section
     /// 6.3), those compressed by 3 asinh(z / 3) (warped, section 6.4), or the chart's own.
@@ -411,6 +415,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     }
     if let Some(lr) = args.refine_lr {
         c.refine.lr = lr;
+    }
+    if let Some(g) = args.refine_grazing {
+        c.refine.grazing_share = g;
     }
     if let Some(lr) = args.student_lr {
         c.student.lr = lr;

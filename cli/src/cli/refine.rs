@@ -36,6 +36,9 @@ pub struct RefineArgs {
     /// Share of the gradient estimated from the material's own samples.
     #[arg(long, default_value_t = RefineConfig::default().target_share)]
     pub target_share: f32,
+    /// Share of the incidences drawn from the grazing band (60 to 89.5 degrees).
+    #[arg(long, default_value_t = RefineConfig::default().grazing_share)]
+    pub grazing_share: f32,
     /// Seed of the refinement's random draws.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -52,6 +55,7 @@ pub fn run(args: RefineArgs, out: &mut dyn std::io::Write) -> Result<(), Command
         samples: args.samples,
         lr: args.lr,
         target_share: args.target_share,
+        grazing_share: args.grazing_share,
     };
     let start = Instant::now();
     let (refined, what) = refine(&model, material.as_ref(), &cfg, args.seed, &Bars::default())?;
