@@ -10,7 +10,7 @@
 use crate::any_model::AnyModel;
 use crate::def::IncidentRange;
 use crate::diagnostics::Diagnostics;
-use crate::math::{cos, sin};
+use crate::math::sin_cos;
 use crate::spec;
 use glam::{Vec2, Vec3};
 
@@ -39,8 +39,8 @@ pub fn sweep_u(k: usize, r: [f32; 4]) -> Vec2 {
 
 /// `wi` at polar angle `theta` (radians) and azimuth `phi`.
 pub fn incident(theta: f32, phi: f32) -> Vec3 {
-    let (st, ct) = (sin(theta), cos(theta));
-    Vec3::new(st * cos(phi), st * sin(phi), ct)
+    let ((st, ct), (sp, cp)) = (sin_cos(theta), sin_cos(phi));
+    Vec3::new(st * cp, st * sp, ct)
 }
 
 /// What one `(wi, u)` of the sweep gave.
@@ -218,7 +218,7 @@ mod tests {
             let theta = d * (core::f32::consts::PI / 180.0);
             let wi = incident(theta, 1.3);
             assert!((wi.length() - 1.0).abs() < 1e-6);
-            assert!((wi.z - cos(theta)).abs() < 1e-6, "{d}");
+            assert!((wi.z - crate::math::sin_cos(theta).1).abs() < 1e-6, "{d}");
         }
     }
 }

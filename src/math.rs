@@ -66,9 +66,12 @@ pub(crate) fn sin(x: f32) -> f32 {
     libm::sinf(x)
 }
 
+/// `(sin x, cos x)` with one argument reduction: the same bits as [`sin`] and libm's
+/// `cosf` (its `sincosf` shares their reduction and kernels; tested below), in one call
+/// instead of two.
 #[inline(always)]
-pub(crate) fn cos(x: f32) -> f32 {
-    libm::cosf(x)
+pub(crate) fn sin_cos(x: f32) -> (f32, f32) {
+    libm::sincosf(x)
 }
 
 #[inline(always)]
@@ -122,6 +125,49 @@ pub fn exp_poly(x: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     extern crate std;
+
+    /// `sin_cos` gives the bits of `sin` and libm's `cosf`, so code that calls it computes
+    /// what the two calls computed: special values, the branch boundaries of the argument
+    /// reduction and random floats of every exponent.
+    #[test]
+    fn sin_cos_matches_sin_and_cos() {
+        let special = [
+            0.0f32,
+            -0.0,
+            1e-45,
+            f32::MIN_POSITIVE,
+            core::f32::consts::FRAC_PI_4,
+            core::f32::consts::PI,
+            -core::f32::consts::PI,
+            1e30,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let random = (0..2_000_000).map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            f32::from_bits((state >> 32) as u32)
+        });
+        let grid = (-40_000..=40_000).map(|i| i as f32 * 1e-4 * core::f32::consts::PI);
+        let same = |a: f32, b: f32| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        for x in special.into_iter().chain(random).chain(grid) {
+            let (s, c) = super::sin_cos(x);
+            assert!(
+                same(s, super::sin(x)),
+                "sin({x:e}): {s:e} vs {:e}",
+                super::sin(x)
+            );
+            assert!(
+                same(c, libm::cosf(x)),
+                "cos({x:e}): {c:e} vs {:e}",
+                libm::cosf(x)
+            );
+        }
+    }
 
     /// `sqrt` (libm's portable routine, see Cargo.toml) is correctly rounded: the same bits
     /// as the CPU's square-root instruction, on the special values and on random floats of

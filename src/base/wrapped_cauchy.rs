@@ -10,7 +10,7 @@
 //! `tan(d/2) = tanh(gamma/2) tan(pi (u - 1/2))` — a deterministic, monotone map from `u`.
 //! (The von Mises law has neither a closed-form inverse CDF nor a stable f16 density.)
 
-use crate::math::{atan2, cos, ln, sin, sinh, tanh};
+use crate::math::{atan2, ln, sin, sin_cos, sinh, tanh};
 use crate::spec::LN_4PI;
 use core::f32::consts::PI;
 
@@ -21,8 +21,8 @@ use core::f32::consts::PI;
 #[inline]
 #[must_use]
 pub fn sample(u: f32, gamma: f32) -> f32 {
-    let a = PI * u;
-    2.0 * atan2(-tanh(0.5 * gamma) * cos(a), sin(a))
+    let (s, c) = sin_cos(PI * u);
+    2.0 * atan2(-tanh(0.5 * gamma) * c, s)
 }
 
 /// `ln p(d)` for an offset `d` (any real; the density is 2 pi periodic).

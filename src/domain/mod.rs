@@ -18,7 +18,8 @@ impl Domain {
         match self {
             Domain::Disk | Domain::HalfVector => [x[0], x[1], 0.0],
             Domain::Sphere | Domain::Equatorial => {
-                [x[0], crate::math::sin(x[1]), crate::math::cos(x[1])]
+                let (s, c) = crate::math::sin_cos(x[1]);
+                [x[0], s, c]
             }
         }
     }
@@ -35,7 +36,7 @@ impl Domain {
                 ([x[0], x[1], 0.0], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
             }
             Domain::Sphere | Domain::Equatorial => {
-                let (s, c) = (crate::math::sin(x[1]), crate::math::cos(x[1]));
+                let (s, c) = crate::math::sin_cos(x[1]);
                 ([x[0], s, c], [[1.0, 0.0, 0.0], [0.0, c, -s]])
             }
         }

@@ -3,7 +3,7 @@
 //! `dw = sin(theta) dtheta dphi`, so `pdf_w(wo) = pdf_x(x) / sin(theta_o)`. `phi` is
 //! periodic (the flow wraps it into [-pi, pi)); `theta` outside (0, pi) is invalid.
 
-use crate::math::{atan2, cos, floor, ln, sin, sqrt};
+use crate::math::{atan2, floor, ln, sin, sin_cos, sqrt};
 use core::f32::consts::{PI, TAU};
 use glam::Vec3;
 
@@ -18,11 +18,12 @@ pub fn wrap(phi: f32) -> f32 {
 #[inline]
 #[must_use]
 pub fn to_direction(x: [f32; 2]) -> Option<Vec3> {
-    let (st, ct) = (sin(x[0]), cos(x[0]));
+    let (st, ct) = sin_cos(x[0]);
     if !(st > 0.0 && x[0] > 0.0 && x[0] < PI) {
         return None;
     }
-    Some(Vec3::new(st * cos(x[1]), st * sin(x[1]), ct))
+    let (sp, cp) = sin_cos(x[1]);
+    Some(Vec3::new(st * cp, st * sp, ct))
 }
 
 /// `(theta, phi)` of a unit direction; `None` on the poles, where `phi` is undefined and

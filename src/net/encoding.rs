@@ -7,7 +7,7 @@
 //! `cos 2a = 1 - 2 sin^2 a`), so one `sin` and one `cos` per axis serve every frequency.
 //! The trainer and the generated shaders use the same recurrence.
 
-use crate::math::{cos, sin};
+use crate::math::sin_cos;
 use core::f32::consts::PI;
 
 /// The encoding of `wi` into `E = 3 + 6 * freqs` values (`E` fixes the frequency count).
@@ -15,8 +15,10 @@ use core::f32::consts::PI;
 #[must_use]
 pub fn encode_wi<const E: usize>(wi: [f32; 3]) -> [f32; E] {
     let mut enc = [0.0; E];
-    let mut s = [sin(PI * wi[0]), sin(PI * wi[1]), sin(PI * wi[2])];
-    let mut c = [cos(PI * wi[0]), cos(PI * wi[1]), cos(PI * wi[2])];
+    let (mut s, mut c) = ([0.0; 3], [0.0; 3]);
+    for a in 0..3 {
+        (s[a], c[a]) = sin_cos(PI * wi[a]);
+    }
     for (slot, w) in enc.iter_mut().zip(wi) {
         *slot = w;
     }

@@ -35,9 +35,9 @@ fn refinement_lowers_the_measured_variance_and_stays_exact() {
 /// from its target for a short refinement to say anything: its RV is about 5).
 #[test]
 fn refinement_on_the_sphere_lowers_the_measured_variance_and_stays_exact() {
-    let spec = "dielectric:beckmann,alpha=0.5,eta=1.5";
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../models/dielectric-beckmann-a0.5-sphere-n8x16.dbsdf");
+    let spec = "principled:base=0.8/0.3/0.2,metallic=0,roughness=0.4,spec_trans=0.5";
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/principled-spectrans-sphere.dbsdf");
     let model = AnyModel::from_blob(&std::fs::read(path).unwrap()).unwrap();
     let refine_cfg = RefineConfig {
         iters: 20,

@@ -173,8 +173,8 @@ pub struct FitArgs {
     #[arg(long)]
     pub refine_lr: Option<f32>,
     /// Share of the variance refinement's incidences drawn from the grazing band (60 to
-    /// 89.5 degrees) instead of the whole range. Default 0.
-    #[arg(long)]
+    /// 89.5 degrees) instead of the whole range, from 0 to 1. Default 0.
+    #[arg(long, value_parser = super::share::parse_share)]
     pub refine_grazing: Option<f32>,
     /// Coordinates of the flow on the disk and the half-vector chart: the base
     /// distribution's standard coordinates z = (x - mu) / sigma (docs/math.md, section

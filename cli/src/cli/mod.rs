@@ -10,6 +10,7 @@ pub mod eval;
 pub mod fit;
 pub mod material;
 pub mod refine;
+pub mod share;
 pub mod tradeoff;
 
 use clap::{Parser, Subcommand};

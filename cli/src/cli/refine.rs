@@ -3,6 +3,7 @@
 //! blob that was fitted without it; writes the f32 blob at `--out` and the f16 beside it.
 
 use super::fit::{f16_path, write_file, Bars, CommandError};
+use super::share::parse_share;
 use clap::Args;
 use diffbsdf::{AnyModel, Precision};
 use diffbsdf_materials::parse_spec;
@@ -34,10 +35,10 @@ pub struct RefineArgs {
     #[arg(long, default_value_t = RefineConfig::default().lr)]
     pub lr: f32,
     /// Share of the gradient estimated from the material's own samples.
-    #[arg(long, default_value_t = RefineConfig::default().target_share)]
+    #[arg(long, default_value_t = RefineConfig::default().target_share, value_parser = parse_share)]
     pub target_share: f32,
     /// Share of the incidences drawn from the grazing band (60 to 89.5 degrees).
-    #[arg(long, default_value_t = RefineConfig::default().grazing_share)]
+    #[arg(long, default_value_t = RefineConfig::default().grazing_share, value_parser = parse_share)]
     pub grazing_share: f32,
     /// Seed of the refinement's random draws.
     #[arg(long, default_value_t = 0)]
