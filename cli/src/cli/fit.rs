@@ -130,6 +130,10 @@ pub struct FitArgs {
     /// Teacher hidden layers.
     #[arg(long)]
     pub teacher_layers: Option<usize>,
+    /// Hidden layers of the student's velocity net, 3 or 4 (the depths of 32 the kernel
+    /// compiles; default 3 on the disk and the half-vector chart, 4 on the sphere).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(3..=4))]
+    pub student_layers: Option<u8>,
     /// Reflow pairs.
     #[arg(long)]
     pub reflow_pairs: Option<usize>,
@@ -381,6 +385,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     }
     if let Some(l) = args.teacher_layers {
         c.teacher_net.hidden_layers = l.clamp(1, u8::MAX as usize) as u8;
+    }
+    if let Some(l) = args.student_layers {
+        c.def.velocity.hidden_layers = l;
     }
     set(&mut c.reflow_pairs, args.reflow_pairs);
     set(&mut c.reflow_steps, args.reflow_steps);
