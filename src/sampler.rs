@@ -112,16 +112,23 @@ impl<
         let steps = self.resolve_steps(steps)?;
         let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
-        let x0 = self.flow_start(&c, u);
-        let (x, ln_det) = self.flow_with_ln_det(&c, x0, steps)?;
-        // The warp's end term joins the steps' sum (docs/math.md, (66)).
-        let ln_det = ln_det + self.end_ln_expansion(x);
-        let x = self.chart_point(&c, x);
-        let wo = self.def.domain.to_direction(x, wi)?;
-        // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (docs/math.md, (38))
-        let ln_pdf = self.start_ln_pdf(&c, x0) - ln_det + self.def.domain.ln_measure(x, wo, wi);
-        let pdf = exp(ln_pdf);
+        let pass = self.flow_with_ln_det(&c, self.flow_start(&c, u), steps)?;
+        let wo = self
+            .def
+            .domain
+            .to_direction(self.chart_point(&c, pass.end), wi)?;
         let wo = frame.to_world(wo);
+        // The density at the returned `wo` as `pdf` reads it: its flow point `end`, the start
+        // point reaching it (docs/math.md, (71), (72)), the measure at `wo` itself.
+        let back = frame.to_local(unit_direction(wo)?);
+        let y = self.def.domain.point_of(back, wi)?;
+        let end = self.flow_point(&c, y);
+        let (x0, ln_det) = self.returned_start(&c, &pass, end, steps)?;
+        // The warp's end term joins the steps' sum (docs/math.md, (66)).
+        let ln_det = ln_det + self.end_ln_expansion(end);
+        // pdf_w = p0(x0) / prod det * (pdf_w / pdf_x)   (docs/math.md, (38))
+        let ln_pdf = self.start_ln_pdf(&c, x0) - ln_det + self.def.domain.ln_measure(y, back, wi);
+        let pdf = exp(ln_pdf);
         (wo.is_finite() && pdf.is_finite() && pdf > 0.0).then_some(Sample { wo, pdf })
     }
 

@@ -3,6 +3,7 @@
 use super::{step_det, step_time, Conditioned};
 use crate::math::ln;
 use crate::model::Model;
+use crate::net::Jacobian;
 
 impl<
         const BE: usize,
@@ -27,19 +28,22 @@ impl<
         x
     }
 
-    /// `x_N` and `sum_k ln det(I + h dv/dx(x_k))`; `None` if a step is not orientation
-    /// preserving (`det <= 0`), where the density formula would not hold.
+    /// The pass with Jacobians from `x0`: `x_N`, `sum_k ln det(I + h dv/dx(x_k))` and the
+    /// product of the step matrices; `None` if a step is not orientation preserving
+    /// (`det <= 0`), where the density formula would not hold.
     #[inline(always)]
     pub(crate) fn flow_with_ln_det(
         &self,
         c: &Conditioned<VW>,
         x0: [f32; 2],
         steps: u32,
-    ) -> Option<([f32; 2], f32)> {
+    ) -> Option<ForwardPass> {
         let domain = self.def.domain;
         let h = 1.0 / steps as f32;
-        let mut x = domain.advance(x0, [0.0, 0.0]);
+        let start = domain.advance(x0, [0.0, 0.0]);
+        let mut x = start;
         let mut ln_det = 0.0;
+        let mut m = IDENTITY;
         for k in 0..steps {
             let step = self.velocity.at_time(&c.cond, step_time(k, h));
             let (feat, dfeat) = domain.features_with_derivative(x);
@@ -49,8 +53,43 @@ impl<
                 return None;
             }
             ln_det += ln(det);
+            m = step_times(h, &j, &m);
             x = domain.advance(x, [h * v[0], h * v[1]]);
         }
-        Some((x, ln_det))
+        Some(ForwardPass {
+            start,
+            end: x,
+            ln_det,
+            m,
+        })
     }
+}
+
+/// What the pass with Jacobians computed: its start and end points, the steps'
+/// `sum_k ln det(I + h J_k)` and `M = prod_k (I + h J_k)` (the last step leftmost), the
+/// derivative of the end point by the start point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ForwardPass {
+    pub start: [f32; 2],
+    pub end: [f32; 2],
+    pub ln_det: f32,
+    pub m: [[f32; 2]; 2],
+}
+
+const IDENTITY: [[f32; 2]; 2] = [[1.0, 0.0], [0.0, 1.0]];
+
+/// `(I + h J) M`, row-major.
+#[inline(always)]
+fn step_times(h: f32, j: &Jacobian, m: &[[f32; 2]; 2]) -> [[f32; 2]; 2] {
+    let a = [
+        [1.0 + h * j[0][0], h * j[0][1]],
+        [h * j[1][0], 1.0 + h * j[1][1]],
+    ];
+    let row = |r: [f32; 2]| {
+        [
+            r[0] * m[0][0] + r[1] * m[1][0],
+            r[0] * m[0][1] + r[1] * m[1][1],
+        ]
+    };
+    [row(a[0]), row(a[1])]
 }

@@ -6,6 +6,7 @@
 
 mod forward;
 mod inverse;
+mod returned;
 
 use crate::base::{warp, BaseDist};
 use crate::model::Model;

@@ -206,6 +206,36 @@ impl Emitter<'_> {
         }
     }
 
+    /// The chart point of the validated direction `wo` (its `x`, `y` in the incident frame
+    /// given as `ox`, `oy`), as locals `ya`, `yb`; `fail` where the domain has no density
+    /// there (the kernel's `Domain::point_of`).
+    pub(super) fn point_of_direction(&mut self, ox: &str, oy: &str, fail: &str) {
+        let zero = self.f(0.0);
+        if self.sphere() {
+            // The equatorial chart is the sphere's about the y axis.
+            let (second, third) = if self.equatorial() {
+                ("wo.z", oy)
+            } else {
+                (oy, "wo.z")
+            };
+            let rho = self.math(Math::Sqrt, &format!("{ox} * {ox} + {second} * {second}"));
+            self.decl(T::F, "rho", &rho);
+            self.code.open(format!("if (!(rho > {zero})) {{"));
+            self.code.line(fail);
+            self.code.close("}");
+            self.decl(T::F, "ya", &self.d.atan2("rho", third));
+            self.decl(T::F, "yb", &self.d.atan2(second, ox));
+        } else if self.half_vector() {
+            self.half_vector_point(ox, oy, fail);
+        } else {
+            self.code.open(format!("if (!(wo.z > {zero})) {{"));
+            self.code.line(fail);
+            self.code.close("}");
+            self.decl(T::F, "ya", ox);
+            self.decl(T::F, "yb", oy);
+        }
+    }
+
     /// The half-vector chart's flow point of `wo` (in the incident frame), as locals `ya`,
     /// `yb`: `h = (wi + wo) / |wi + wo|` (`src/domain/half_vector.rs`, `from_direction`).
     pub(super) fn half_vector_point(&mut self, ox: &str, oy: &str, fail: &str) {

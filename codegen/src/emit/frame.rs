@@ -38,6 +38,18 @@ impl Emitter<'_> {
         self.decl(self.st("Frame"), "fr", &fr);
     }
 
+    /// The validated direction `wo` (a `Unit`) in the incident frame: its `x`, `y` as
+    /// locals `lox`, `loy` for an isotropic model (`wo.x`, `wo.y` otherwise); `z` is
+    /// unchanged by the frame.
+    pub(super) fn direction_in_frame(&mut self) -> (&'static str, &'static str) {
+        if !self.m.def.isotropic {
+            return ("wo.x", "wo.y");
+        }
+        self.decl(T::F, "lox", "fr.c * wo.x + fr.s * wo.y");
+        self.decl(T::F, "loy", "fr.c * wo.y - fr.s * wo.x");
+        ("lox", "loy")
+    }
+
     /// Isotropic models: `r.xy` turned back from the incident frame into the world.
     pub(super) fn turn_back(&mut self, r: &str) {
         if !self.m.def.isotropic {

@@ -315,36 +315,8 @@ impl Emitter<'_> {
         self.code.line(&fail);
         self.code.close("}");
         self.prologue(false, &fail);
-        let (ox, oy) = if self.m.def.isotropic {
-            self.decl(T::F, "lox", "fr.c * wo.x + fr.s * wo.y");
-            self.decl(T::F, "loy", "fr.c * wo.y - fr.s * wo.x");
-            ("lox", "loy")
-        } else {
-            ("wo.x", "wo.y")
-        };
-        if self.sphere() {
-            // The equatorial chart is the sphere's about the y axis.
-            let (second, third) = if self.equatorial() {
-                ("wo.z", oy)
-            } else {
-                (oy, "wo.z")
-            };
-            let rho = self.math(Math::Sqrt, &format!("{ox} * {ox} + {second} * {second}"));
-            self.decl(T::F, "rho", &rho);
-            self.code.open(format!("if (!(rho > {zero})) {{"));
-            self.code.line(&fail);
-            self.code.close("}");
-            self.decl(T::F, "ya", &self.d.atan2("rho", third));
-            self.decl(T::F, "yb", &self.d.atan2(second, ox));
-        } else if self.half_vector() {
-            self.half_vector_point(ox, oy, &fail);
-        } else {
-            self.code.open(format!("if (!(wo.z > {zero})) {{"));
-            self.code.line(&fail);
-            self.code.close("}");
-            self.decl(T::F, "ya", ox);
-            self.decl(T::F, "yb", oy);
-        }
+        let (ox, oy) = self.direction_in_frame();
+        self.point_of_direction(ox, oy, &fail);
         let (fa, fb) = self.flow_point();
         self.start_point(fa, fb);
         self.decl(T::F, "ln_det", &zero);

@@ -212,6 +212,7 @@ impl<'a> Emitter<'a> {
             self.direction_impl();
         }
         if self.e.sample {
+            self.returned();
             self.sample_impl();
         }
         // src/flow/inverse.rs: the exact inverse and the PDF of a given direction.
@@ -293,6 +294,22 @@ impl<'a> Emitter<'a> {
                 self.d
                     .struct_decl(&self.p("Frame"), &[(T::F, "c"), (T::F, "s")]),
             );
+        }
+        if self.e.sample {
+            lines.push(
+                "// The direction a sample returns (x, y, z), read back as pdf() reads it: in the"
+                    .into(),
+            );
+            lines.push(
+                "// incident frame (lx, ly, lz), its chart point (ya, yb), its flow point (fa, fb)."
+                    .into(),
+            );
+            let mut f: Vec<(T, &str)> = forward::RETURNED_FIELDS
+                .iter()
+                .map(|n| (T::F, *n))
+                .collect();
+            f.push((T::B, "ok"));
+            lines.extend(self.d.struct_decl(&self.p("Returned"), &f));
         }
         lines.push("// A direction and its PDF; all zero when invalid.".into());
         let r = [(T::F, "x"), (T::F, "y"), (T::F, "z"), (T::F, "pdf")];

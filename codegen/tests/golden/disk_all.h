@@ -101,6 +101,21 @@ typedef struct diffbsdf_tiny_disk_Frame {
     float c;
     float s;
 } diffbsdf_tiny_disk_Frame;
+/* The direction a sample returns (x, y, z), read back as pdf() reads it: in the */
+/* incident frame (lx, ly, lz), its chart point (ya, yb), its flow point (fa, fb). */
+typedef struct diffbsdf_tiny_disk_Returned {
+    float x;
+    float y;
+    float z;
+    float lx;
+    float ly;
+    float lz;
+    float ya;
+    float yb;
+    float fa;
+    float fb;
+    int ok;
+} diffbsdf_tiny_disk_Returned;
 /* A direction and its PDF; all zero when invalid. */
 typedef struct diffbsdf_tiny_disk_Result {
     float x;
@@ -436,7 +451,60 @@ static inline diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_direction_impl(float 
     return r;
 }
 
-/* x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x). */
+/* The direction returned for the flow's end point (ea, eb), and that direction as */
+/* pdf() reads it: in the incident frame (lx, ly, lz), its chart point (ya, yb) and */
+/* its flow point (fa, fb). ok = false where any of these fails. */
+static inline diffbsdf_tiny_disk_Returned diffbsdf_tiny_disk_returned(float ea, float eb, diffbsdf_tiny_disk_Frame fr) {
+    diffbsdf_tiny_disk_Returned q;
+    q.x = 0.0f;
+    q.y = 0.0f;
+    q.z = 0.0f;
+    q.lx = 0.0f;
+    q.ly = 0.0f;
+    q.lz = 0.0f;
+    q.ya = 0.0f;
+    q.yb = 0.0f;
+    q.fa = 0.0f;
+    q.fb = 0.0f;
+    q.ok = 0;
+    float a = ea;
+    float b = eb;
+    diffbsdf_tiny_disk_Result r = diffbsdf_tiny_disk_to_direction(a, b);
+    if (!(r.pdf > 0.0f)) {
+        return q;
+    }
+    float rx = fr.c * r.x - fr.s * r.y;
+    r.y = fr.s * r.x + fr.c * r.y;
+    r.x = rx;
+    q.x = r.x;
+    q.y = r.y;
+    q.z = r.z;
+    diffbsdf_tiny_disk_Unit wo = diffbsdf_tiny_disk_unit(r.x, r.y, r.z);
+    if (!wo.ok) {
+        return q;
+    }
+    float lox = fr.c * wo.x + fr.s * wo.y;
+    float loy = fr.c * wo.y - fr.s * wo.x;
+    if (!(wo.z > 0.0f)) {
+        return q;
+    }
+    float ya = lox;
+    float yb = loy;
+    q.lx = lox;
+    q.ly = loy;
+    q.lz = wo.z;
+    q.ya = ya;
+    q.yb = yb;
+    q.fa = ya;
+    q.fb = yb;
+    q.ok = 1;
+    return q;
+}
+
+/* x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x), */
+/* at the flow point pdf() reads for the direction returned: the start point moved by */
+/* M^-1 (end - x_N), M = prod (I + h J_k), and where it moves by more than 0.000003 (1 + |x0|), */
+/* a second pass from it for the determinants (docs/math.md, (71), (72)). */
 static inline diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx, float wy, float wz, float u0, float u1, unsigned steps) {
     diffbsdf_tiny_disk_Unit wi = diffbsdf_tiny_disk_unit(wx, wy, wz);
     if (!(wi.ok && wi.z >= 0.0f && (fabsf(u0) <= 3.40282347e+38f) && u0 >= 0.0f && u0 <= 1.0f && (fabsf(u1) <= 3.40282347e+38f) && u1 >= 0.0f && u1 <= 1.0f)) {
@@ -455,27 +523,74 @@ static inline diffbsdf_tiny_disk_Result diffbsdf_tiny_disk_sample_impl(float wx,
     diffbsdf_tiny_disk_Vec2 x0 = diffbsdf_tiny_disk_base_sample(cond, u0, u1);
     float a = x0.x;
     float b = x0.y;
+    float sa = a;
+    float sb = b;
     float ln_det = 0.0f;
-    for (unsigned k = 0u; k < n; k++) {
-        float t = (float)(k) * h;
-        diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
-        float det = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
-        if (!((fabsf(det) <= 3.40282347e+38f) && det > 0.0f)) {
+    float m00 = 1.0f;
+    float m01 = 0.0f;
+    float m10 = 0.0f;
+    float m11 = 1.0f;
+    diffbsdf_tiny_disk_Returned q;
+    for (unsigned pass_no = 0u; pass_no < 2u; pass_no++) {
+        a = sa;
+        b = sb;
+        ln_det = 0.0f;
+        m00 = 1.0f;
+        m01 = 0.0f;
+        m10 = 0.0f;
+        m11 = 1.0f;
+        for (unsigned k = 0u; k < n; k++) {
+            float t = (float)(k) * h;
+            diffbsdf_tiny_disk_Jac j = diffbsdf_tiny_disk_velocity_jacobian(cond, t, a, b);
+            float det = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
+            if (!((fabsf(det) <= 3.40282347e+38f) && det > 0.0f)) {
+                return diffbsdf_tiny_disk_none();
+            }
+            ln_det = ln_det + logf(det);
+            /* M = (I + h J) M. */
+            float a00 = 1.0f + h * j.j00;
+            float a01 = h * j.j01;
+            float a10 = h * j.j10;
+            float a11 = 1.0f + h * j.j11;
+            float n00 = a00 * m00 + a01 * m10;
+            float n01 = a00 * m01 + a01 * m11;
+            m10 = a10 * m00 + a11 * m10;
+            m11 = a10 * m01 + a11 * m11;
+            m00 = n00;
+            m01 = n01;
+            a = a + h * j.v0;
+            b = b + h * j.v1;
+        }
+        if (pass_no == 1u) {
+            break;
+        }
+        q = diffbsdf_tiny_disk_returned(a, b, fr);
+        if (!q.ok) {
             return diffbsdf_tiny_disk_none();
         }
-        ln_det = ln_det + logf(det);
-        a = a + h * j.v0;
-        b = b + h * j.v1;
+        /* dx0 = M^-1 (end - x_N) by the 2x2 adjugate (docs/math.md, (71)). */
+        float d0 = q.fa - a;
+        float d1 = q.fb - b;
+        float mdet = m00 * m11 - m01 * m10;
+        float dx0 = (m11 * d0 - m01 * d1) / mdet;
+        float dx1 = (m00 * d1 - m10 * d0) / mdet;
+        if (!((fabsf(dx0) <= 3.40282347e+38f) && (fabsf(dx1) <= 3.40282347e+38f))) {
+            break;
+        }
+        float size = fmaxf(fabsf(dx0), fabsf(dx1));
+        float scale = 1.0f + fmaxf(fabsf(sa), fabsf(sb));
+        sa = sa + dx0;
+        sb = sb + dx1;
+        if (size <= 3e-6f * scale) {
+            break;
+        }
     }
-    diffbsdf_tiny_disk_Result r = diffbsdf_tiny_disk_to_direction(a, b);
-    if (!(r.pdf > 0.0f)) {
-        return diffbsdf_tiny_disk_none();
-    }
-    float ln_pdf = diffbsdf_tiny_disk_base_ln_pdf(cond, x0.x, x0.y) - ln_det + logf(r.z);
+    float ln_pdf = diffbsdf_tiny_disk_base_ln_pdf(cond, sa, sb) - ln_det + logf(q.lz);
+    diffbsdf_tiny_disk_Result r;
+    r.x = q.x;
+    r.y = q.y;
+    r.z = q.z;
     r.pdf = expf(ln_pdf);
-    float rx = fr.c * r.x - fr.s * r.y;
-    r.y = fr.s * r.x + fr.c * r.y;
-    r.x = rx;
     if (!((fabsf(r.x) <= 3.40282347e+38f) && (fabsf(r.y) <= 3.40282347e+38f) && (fabsf(r.z) <= 3.40282347e+38f) && (fabsf(r.pdf) <= 3.40282347e+38f) && r.pdf > 0.0f)) {
         return diffbsdf_tiny_disk_none();
     }

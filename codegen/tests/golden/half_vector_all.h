@@ -101,6 +101,21 @@ typedef struct diffbsdf_tiny_half_vector_Frame {
     float c;
     float s;
 } diffbsdf_tiny_half_vector_Frame;
+/* The direction a sample returns (x, y, z), read back as pdf() reads it: in the */
+/* incident frame (lx, ly, lz), its chart point (ya, yb), its flow point (fa, fb). */
+typedef struct diffbsdf_tiny_half_vector_Returned {
+    float x;
+    float y;
+    float z;
+    float lx;
+    float ly;
+    float lz;
+    float ya;
+    float yb;
+    float fa;
+    float fb;
+    int ok;
+} diffbsdf_tiny_half_vector_Returned;
 /* A direction and its PDF; all zero when invalid. */
 typedef struct diffbsdf_tiny_half_vector_Result {
     float x;
@@ -469,7 +484,89 @@ static inline diffbsdf_tiny_half_vector_Result diffbsdf_tiny_half_vector_directi
     return r;
 }
 
-/* x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x). */
+/* The direction returned for the flow's end point (ea, eb), and that direction as */
+/* pdf() reads it: in the incident frame (lx, ly, lz), its chart point (ya, yb) and */
+/* its flow point (fa, fb). ok = false where any of these fails. */
+static inline diffbsdf_tiny_half_vector_Returned diffbsdf_tiny_half_vector_returned(diffbsdf_tiny_half_vector_Cond cond, float ea, float eb, float lwx, float lwy, float lwz, diffbsdf_tiny_half_vector_Frame fr) {
+    diffbsdf_tiny_half_vector_Returned q;
+    q.x = 0.0f;
+    q.y = 0.0f;
+    q.z = 0.0f;
+    q.lx = 0.0f;
+    q.ly = 0.0f;
+    q.lz = 0.0f;
+    q.ya = 0.0f;
+    q.yb = 0.0f;
+    q.fa = 0.0f;
+    q.fb = 0.0f;
+    q.ok = 0;
+    float a = ea;
+    float b = eb;
+    /* The end point in chart coordinates: x = mu + sigma z (docs/math.md, (61)). */
+    a = cond.p0 + expf(cond.p2) * diffbsdf_tiny_half_vector_warp_expand(a);
+    b = cond.p1 + expf(cond.p3) * diffbsdf_tiny_half_vector_warp_expand(b);
+    diffbsdf_tiny_half_vector_Result r = diffbsdf_tiny_half_vector_to_direction(a, b, lwx, lwy, lwz);
+    if (!(r.pdf > 0.0f)) {
+        return q;
+    }
+    float rx = fr.c * r.x - fr.s * r.y;
+    r.y = fr.s * r.x + fr.c * r.y;
+    r.x = rx;
+    q.x = r.x;
+    q.y = r.y;
+    q.z = r.z;
+    diffbsdf_tiny_half_vector_Unit wo = diffbsdf_tiny_half_vector_unit(r.x, r.y, r.z);
+    if (!wo.ok) {
+        return q;
+    }
+    float lox = fr.c * wo.x + fr.s * wo.y;
+    float loy = fr.c * wo.y - fr.s * wo.x;
+    if (!(wo.z > 0.0f)) {
+        return q;
+    }
+    float sx = lwx + lox;
+    float sy = lwy + loy;
+    float sz = lwz + wo.z;
+    float rho = sqrtf(lwx * lwx + lwy * lwy);
+    if (rho > 0.0f) {
+        float hc = lwx / rho;
+        float hs = lwy / rho;
+        float ht = hc * lox + hs * loy;
+        float hp = hc * loy - hs * lox;
+        float st = rho + ht;
+        if (ht < 0.0f && rho - ht > 1.0f) {
+            st = (hp * hp + (wo.z * wo.z - lwz * lwz)) / (rho - ht);
+        }
+        sx = hc * st - hs * hp;
+        sy = hs * st + hc * hp;
+    }
+    float slen = sqrtf(sx * sx + sy * sy + sz * sz);
+    if (!(slen > 0.0f)) {
+        return q;
+    }
+    float sinv = 1.0f / slen;
+    if (!(sz * sinv > 0.0f)) {
+        return q;
+    }
+    float ya = sx * sinv;
+    float yb = sy * sinv;
+    float za = diffbsdf_tiny_half_vector_warp_compress((ya - cond.p0) * expf(-cond.p2));
+    float zb = diffbsdf_tiny_half_vector_warp_compress((yb - cond.p1) * expf(-cond.p3));
+    q.lx = lox;
+    q.ly = loy;
+    q.lz = wo.z;
+    q.ya = ya;
+    q.yb = yb;
+    q.fa = za;
+    q.fb = zb;
+    q.ok = 1;
+    return q;
+}
+
+/* x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x), */
+/* at the flow point pdf() reads for the direction returned: the start point moved by */
+/* M^-1 (end - x_N), M = prod (I + h J_k), and where it moves by more than 0.000003 (1 + |x0|), */
+/* a second pass from it for the determinants (docs/math.md, (71), (72)). */
 static inline diffbsdf_tiny_half_vector_Result diffbsdf_tiny_half_vector_sample_impl(float wx, float wy, float wz, float u0, float u1, unsigned steps) {
     diffbsdf_tiny_half_vector_Unit wi = diffbsdf_tiny_half_vector_unit(wx, wy, wz);
     if (!(wi.ok && wi.z >= 0.0f && (fabsf(u0) <= 3.40282347e+38f) && u0 >= 0.0f && u0 <= 1.0f && (fabsf(u1) <= 3.40282347e+38f) && u1 >= 0.0f && u1 <= 1.0f)) {
@@ -491,48 +588,92 @@ static inline diffbsdf_tiny_half_vector_Result diffbsdf_tiny_half_vector_sample_
     diffbsdf_tiny_half_vector_Vec2 x0 = diffbsdf_tiny_half_vector_base_sample(u0, u1);
     float a = x0.x;
     float b = x0.y;
+    float sa = a;
+    float sb = b;
     float ln_det = 0.0f;
-    for (unsigned k = 0u; k < n; k++) {
-        float t = (float)(k) * h;
-        diffbsdf_tiny_half_vector_Jac j = diffbsdf_tiny_half_vector_velocity_jacobian(cond, t, a, b);
-        float det = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
-        if (!((fabsf(det) <= 3.40282347e+38f) && det > 0.0f)) {
+    float m00 = 1.0f;
+    float m01 = 0.0f;
+    float m10 = 0.0f;
+    float m11 = 1.0f;
+    diffbsdf_tiny_half_vector_Returned q;
+    for (unsigned pass_no = 0u; pass_no < 2u; pass_no++) {
+        a = sa;
+        b = sb;
+        ln_det = 0.0f;
+        m00 = 1.0f;
+        m01 = 0.0f;
+        m10 = 0.0f;
+        m11 = 1.0f;
+        for (unsigned k = 0u; k < n; k++) {
+            float t = (float)(k) * h;
+            diffbsdf_tiny_half_vector_Jac j = diffbsdf_tiny_half_vector_velocity_jacobian(cond, t, a, b);
+            float det = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
+            if (!((fabsf(det) <= 3.40282347e+38f) && det > 0.0f)) {
+                return diffbsdf_tiny_half_vector_none();
+            }
+            ln_det = ln_det + logf(det);
+            /* M = (I + h J) M. */
+            float a00 = 1.0f + h * j.j00;
+            float a01 = h * j.j01;
+            float a10 = h * j.j10;
+            float a11 = 1.0f + h * j.j11;
+            float n00 = a00 * m00 + a01 * m10;
+            float n01 = a00 * m01 + a01 * m11;
+            m10 = a10 * m00 + a11 * m10;
+            m11 = a10 * m01 + a11 * m11;
+            m00 = n00;
+            m01 = n01;
+            a = a + h * j.v0;
+            b = b + h * j.v1;
+        }
+        if (pass_no == 1u) {
+            break;
+        }
+        q = diffbsdf_tiny_half_vector_returned(cond, a, b, lwx, lwy, lwz, fr);
+        if (!q.ok) {
             return diffbsdf_tiny_half_vector_none();
         }
-        ln_det = ln_det + logf(det);
-        a = a + h * j.v0;
-        b = b + h * j.v1;
+        /* dx0 = M^-1 (end - x_N) by the 2x2 adjugate (docs/math.md, (71)). */
+        float d0 = q.fa - a;
+        float d1 = q.fb - b;
+        float mdet = m00 * m11 - m01 * m10;
+        float dx0 = (m11 * d0 - m01 * d1) / mdet;
+        float dx1 = (m00 * d1 - m10 * d0) / mdet;
+        if (!((fabsf(dx0) <= 3.40282347e+38f) && (fabsf(dx1) <= 3.40282347e+38f))) {
+            break;
+        }
+        float size = fmaxf(fabsf(dx0), fabsf(dx1));
+        float scale = 1.0f + fmaxf(fabsf(sa), fabsf(sb));
+        sa = sa + dx0;
+        sb = sb + dx1;
+        if (size <= 3e-6f * scale) {
+            break;
+        }
     }
     /* ln |dz/dy| of the warp at the end point joins the steps' sum (docs/math.md, (66)). */
-    ln_det = ln_det + (diffbsdf_tiny_half_vector_warp_ln_expansion(a) + diffbsdf_tiny_half_vector_warp_ln_expansion(b));
-    /* The end point in chart coordinates: x = mu + sigma z (docs/math.md, (61)). */
-    a = cond.p0 + expf(cond.p2) * diffbsdf_tiny_half_vector_warp_expand(a);
-    b = cond.p1 + expf(cond.p3) * diffbsdf_tiny_half_vector_warp_expand(b);
-    diffbsdf_tiny_half_vector_Result r = diffbsdf_tiny_half_vector_to_direction(a, b, lwx, lwy, lwz);
-    if (!(r.pdf > 0.0f)) {
-        return diffbsdf_tiny_half_vector_none();
-    }
-    float sx = lwx + r.x;
-    float sy = lwy + r.y;
-    float sz = lwz + r.z;
+    ln_det = ln_det + (diffbsdf_tiny_half_vector_warp_ln_expansion(q.fa) + diffbsdf_tiny_half_vector_warp_ln_expansion(q.fb));
+    float sx = lwx + q.lx;
+    float sy = lwy + q.ly;
+    float sz = lwz + q.lz;
     float rho = sqrtf(lwx * lwx + lwy * lwy);
     if (rho > 0.0f) {
         float hc = lwx / rho;
         float hs = lwy / rho;
-        float ht = hc * r.x + hs * r.y;
-        float hp = hc * r.y - hs * r.x;
+        float ht = hc * q.lx + hs * q.ly;
+        float hp = hc * q.ly - hs * q.lx;
         float st = rho + ht;
         if (ht < 0.0f && rho - ht > 1.0f) {
-            st = (hp * hp + (r.z * r.z - lwz * lwz)) / (rho - ht);
+            st = (hp * hp + (q.lz * q.lz - lwz * lwz)) / (rho - ht);
         }
         sx = hc * st - hs * hp;
         sy = hs * st + hc * hp;
     }
-    float ln_pdf = diffbsdf_tiny_half_vector_base_ln_pdf(cond, x0.x, x0.y) - ln_det + logf(sz / (2.0f * (sx * sx + sy * sy + sz * sz)));
+    float ln_pdf = diffbsdf_tiny_half_vector_base_ln_pdf(cond, sa, sb) - ln_det + logf(sz / (2.0f * (sx * sx + sy * sy + sz * sz)));
+    diffbsdf_tiny_half_vector_Result r;
+    r.x = q.x;
+    r.y = q.y;
+    r.z = q.z;
     r.pdf = expf(ln_pdf);
-    float rx = fr.c * r.x - fr.s * r.y;
-    r.y = fr.s * r.x + fr.c * r.y;
-    r.x = rx;
     if (!((fabsf(r.x) <= 3.40282347e+38f) && (fabsf(r.y) <= 3.40282347e+38f) && (fabsf(r.z) <= 3.40282347e+38f) && (fabsf(r.pdf) <= 3.40282347e+38f) && r.pdf > 0.0f)) {
         return diffbsdf_tiny_half_vector_none();
     }

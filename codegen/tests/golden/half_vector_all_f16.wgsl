@@ -89,6 +89,21 @@ struct diffbsdf_tiny_half_vector_Frame {
     c: f32,
     s: f32,
 }
+// The direction a sample returns (x, y, z), read back as pdf() reads it: in the
+// incident frame (lx, ly, lz), its chart point (ya, yb), its flow point (fa, fb).
+struct diffbsdf_tiny_half_vector_Returned {
+    x: f32,
+    y: f32,
+    z: f32,
+    lx: f32,
+    ly: f32,
+    lz: f32,
+    ya: f32,
+    yb: f32,
+    fa: f32,
+    fb: f32,
+    ok: bool,
+}
 // A direction and its PDF; all zero when invalid.
 struct diffbsdf_tiny_half_vector_Result {
     x: f32,
@@ -457,7 +472,89 @@ fn diffbsdf_tiny_half_vector_direction_impl(wx: f32, wy: f32, wz: f32, u0: f32, 
     return r;
 }
 
-// x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x).
+// The direction returned for the flow's end point (ea, eb), and that direction as
+// pdf() reads it: in the incident frame (lx, ly, lz), its chart point (ya, yb) and
+// its flow point (fa, fb). ok = false where any of these fails.
+fn diffbsdf_tiny_half_vector_returned(cond: diffbsdf_tiny_half_vector_Cond, ea: f32, eb: f32, lwx: f32, lwy: f32, lwz: f32, fr: diffbsdf_tiny_half_vector_Frame) -> diffbsdf_tiny_half_vector_Returned {
+    var q: diffbsdf_tiny_half_vector_Returned;
+    q.x = 0.0f;
+    q.y = 0.0f;
+    q.z = 0.0f;
+    q.lx = 0.0f;
+    q.ly = 0.0f;
+    q.lz = 0.0f;
+    q.ya = 0.0f;
+    q.yb = 0.0f;
+    q.fa = 0.0f;
+    q.fb = 0.0f;
+    q.ok = false;
+    var a: f32 = ea;
+    var b: f32 = eb;
+    // The end point in chart coordinates: x = mu + sigma z (docs/math.md, (61)).
+    a = cond.p0 + exp(cond.p2) * diffbsdf_tiny_half_vector_warp_expand(a);
+    b = cond.p1 + exp(cond.p3) * diffbsdf_tiny_half_vector_warp_expand(b);
+    var r: diffbsdf_tiny_half_vector_Result = diffbsdf_tiny_half_vector_to_direction(a, b, lwx, lwy, lwz);
+    if (!(r.pdf > 0.0f)) {
+        return q;
+    }
+    var rx: f32 = fr.c * r.x - fr.s * r.y;
+    r.y = fr.s * r.x + fr.c * r.y;
+    r.x = rx;
+    q.x = r.x;
+    q.y = r.y;
+    q.z = r.z;
+    var wo: diffbsdf_tiny_half_vector_Unit = diffbsdf_tiny_half_vector_unit(r.x, r.y, r.z);
+    if (!wo.ok) {
+        return q;
+    }
+    var lox: f32 = fr.c * wo.x + fr.s * wo.y;
+    var loy: f32 = fr.c * wo.y - fr.s * wo.x;
+    if (!(wo.z > 0.0f)) {
+        return q;
+    }
+    var sx: f32 = lwx + lox;
+    var sy: f32 = lwy + loy;
+    var sz: f32 = lwz + wo.z;
+    var rho: f32 = sqrt(lwx * lwx + lwy * lwy);
+    if (rho > 0.0f) {
+        var hc: f32 = lwx / rho;
+        var hs: f32 = lwy / rho;
+        var ht: f32 = hc * lox + hs * loy;
+        var hp: f32 = hc * loy - hs * lox;
+        var st: f32 = rho + ht;
+        if (ht < 0.0f && rho - ht > 1.0f) {
+            st = (hp * hp + (wo.z * wo.z - lwz * lwz)) / (rho - ht);
+        }
+        sx = hc * st - hs * hp;
+        sy = hs * st + hc * hp;
+    }
+    var slen: f32 = sqrt(sx * sx + sy * sy + sz * sz);
+    if (!(slen > 0.0f)) {
+        return q;
+    }
+    var sinv: f32 = 1.0f / slen;
+    if (!(sz * sinv > 0.0f)) {
+        return q;
+    }
+    var ya: f32 = sx * sinv;
+    var yb: f32 = sy * sinv;
+    var za: f32 = diffbsdf_tiny_half_vector_warp_compress((ya - cond.p0) * exp(-cond.p2));
+    var zb: f32 = diffbsdf_tiny_half_vector_warp_compress((yb - cond.p1) * exp(-cond.p3));
+    q.lx = lox;
+    q.ly = loy;
+    q.lz = wo.z;
+    q.ya = ya;
+    q.yb = yb;
+    q.fa = za;
+    q.fb = zb;
+    q.ok = true;
+    return q;
+}
+
+// x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x),
+// at the flow point pdf() reads for the direction returned: the start point moved by
+// M^-1 (end - x_N), M = prod (I + h J_k), and where it moves by more than 0.000003 (1 + |x0|),
+// a second pass from it for the determinants (docs/math.md, (71), (72)).
 fn diffbsdf_tiny_half_vector_sample_impl(wx: f32, wy: f32, wz: f32, u0: f32, u1: f32, steps: u32) -> diffbsdf_tiny_half_vector_Result {
     var wi: diffbsdf_tiny_half_vector_Unit = diffbsdf_tiny_half_vector_unit(wx, wy, wz);
     if (!(wi.ok && wi.z >= 0.0f && ((bitcast<u32>(u0) & 0x7f800000u) != 0x7f800000u) && u0 >= 0.0f && u0 <= 1.0f && ((bitcast<u32>(u1) & 0x7f800000u) != 0x7f800000u) && u1 >= 0.0f && u1 <= 1.0f)) {
@@ -479,48 +576,92 @@ fn diffbsdf_tiny_half_vector_sample_impl(wx: f32, wy: f32, wz: f32, u0: f32, u1:
     var x0: diffbsdf_tiny_half_vector_Vec2 = diffbsdf_tiny_half_vector_base_sample(u0, u1);
     var a: f32 = x0.x;
     var b: f32 = x0.y;
+    var sa: f32 = a;
+    var sb: f32 = b;
     var ln_det: f32 = 0.0f;
-    for (var k = 0u; k < n; k++) {
-        var t: f32 = f32(k) * h;
-        var j: diffbsdf_tiny_half_vector_Jac = diffbsdf_tiny_half_vector_velocity_jacobian(cond, t, a, b);
-        var det: f32 = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
-        if (!(((bitcast<u32>(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0f)) {
+    var m00: f32 = 1.0f;
+    var m01: f32 = 0.0f;
+    var m10: f32 = 0.0f;
+    var m11: f32 = 1.0f;
+    var q: diffbsdf_tiny_half_vector_Returned;
+    for (var pass_no = 0u; pass_no < 2u; pass_no++) {
+        a = sa;
+        b = sb;
+        ln_det = 0.0f;
+        m00 = 1.0f;
+        m01 = 0.0f;
+        m10 = 0.0f;
+        m11 = 1.0f;
+        for (var k = 0u; k < n; k++) {
+            var t: f32 = f32(k) * h;
+            var j: diffbsdf_tiny_half_vector_Jac = diffbsdf_tiny_half_vector_velocity_jacobian(cond, t, a, b);
+            var det: f32 = (1.0f + h * j.j00) * (1.0f + h * j.j11) - (h * j.j01) * (h * j.j10);
+            if (!(((bitcast<u32>(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0f)) {
+                return diffbsdf_tiny_half_vector_none();
+            }
+            ln_det = ln_det + log(det);
+            // M = (I + h J) M.
+            var a00: f32 = 1.0f + h * j.j00;
+            var a01: f32 = h * j.j01;
+            var a10: f32 = h * j.j10;
+            var a11: f32 = 1.0f + h * j.j11;
+            var n00: f32 = a00 * m00 + a01 * m10;
+            var n01: f32 = a00 * m01 + a01 * m11;
+            m10 = a10 * m00 + a11 * m10;
+            m11 = a10 * m01 + a11 * m11;
+            m00 = n00;
+            m01 = n01;
+            a = a + h * j.v0;
+            b = b + h * j.v1;
+        }
+        if (pass_no == 1u) {
+            break;
+        }
+        q = diffbsdf_tiny_half_vector_returned(cond, a, b, lwx, lwy, lwz, fr);
+        if (!q.ok) {
             return diffbsdf_tiny_half_vector_none();
         }
-        ln_det = ln_det + log(det);
-        a = a + h * j.v0;
-        b = b + h * j.v1;
+        // dx0 = M^-1 (end - x_N) by the 2x2 adjugate (docs/math.md, (71)).
+        var d0: f32 = q.fa - a;
+        var d1: f32 = q.fb - b;
+        var mdet: f32 = m00 * m11 - m01 * m10;
+        var dx0: f32 = (m11 * d0 - m01 * d1) / mdet;
+        var dx1: f32 = (m00 * d1 - m10 * d0) / mdet;
+        if (!(((bitcast<u32>(dx0) & 0x7f800000u) != 0x7f800000u) && ((bitcast<u32>(dx1) & 0x7f800000u) != 0x7f800000u))) {
+            break;
+        }
+        var size: f32 = max(abs(dx0), abs(dx1));
+        var scale: f32 = 1.0f + max(abs(sa), abs(sb));
+        sa = sa + dx0;
+        sb = sb + dx1;
+        if (size <= 3e-6f * scale) {
+            break;
+        }
     }
     // ln |dz/dy| of the warp at the end point joins the steps' sum (docs/math.md, (66)).
-    ln_det = ln_det + (diffbsdf_tiny_half_vector_warp_ln_expansion(a) + diffbsdf_tiny_half_vector_warp_ln_expansion(b));
-    // The end point in chart coordinates: x = mu + sigma z (docs/math.md, (61)).
-    a = cond.p0 + exp(cond.p2) * diffbsdf_tiny_half_vector_warp_expand(a);
-    b = cond.p1 + exp(cond.p3) * diffbsdf_tiny_half_vector_warp_expand(b);
-    var r: diffbsdf_tiny_half_vector_Result = diffbsdf_tiny_half_vector_to_direction(a, b, lwx, lwy, lwz);
-    if (!(r.pdf > 0.0f)) {
-        return diffbsdf_tiny_half_vector_none();
-    }
-    var sx: f32 = lwx + r.x;
-    var sy: f32 = lwy + r.y;
-    var sz: f32 = lwz + r.z;
+    ln_det = ln_det + (diffbsdf_tiny_half_vector_warp_ln_expansion(q.fa) + diffbsdf_tiny_half_vector_warp_ln_expansion(q.fb));
+    var sx: f32 = lwx + q.lx;
+    var sy: f32 = lwy + q.ly;
+    var sz: f32 = lwz + q.lz;
     var rho: f32 = sqrt(lwx * lwx + lwy * lwy);
     if (rho > 0.0f) {
         var hc: f32 = lwx / rho;
         var hs: f32 = lwy / rho;
-        var ht: f32 = hc * r.x + hs * r.y;
-        var hp: f32 = hc * r.y - hs * r.x;
+        var ht: f32 = hc * q.lx + hs * q.ly;
+        var hp: f32 = hc * q.ly - hs * q.lx;
         var st: f32 = rho + ht;
         if (ht < 0.0f && rho - ht > 1.0f) {
-            st = (hp * hp + (r.z * r.z - lwz * lwz)) / (rho - ht);
+            st = (hp * hp + (q.lz * q.lz - lwz * lwz)) / (rho - ht);
         }
         sx = hc * st - hs * hp;
         sy = hs * st + hc * hp;
     }
-    var ln_pdf: f32 = diffbsdf_tiny_half_vector_base_ln_pdf(cond, x0.x, x0.y) - ln_det + log(sz / (2.0f * (sx * sx + sy * sy + sz * sz)));
+    var ln_pdf: f32 = diffbsdf_tiny_half_vector_base_ln_pdf(cond, sa, sb) - ln_det + log(sz / (2.0f * (sx * sx + sy * sy + sz * sz)));
+    var r: diffbsdf_tiny_half_vector_Result;
+    r.x = q.x;
+    r.y = q.y;
+    r.z = q.z;
     r.pdf = exp(ln_pdf);
-    var rx: f32 = fr.c * r.x - fr.s * r.y;
-    r.y = fr.s * r.x + fr.c * r.y;
-    r.x = rx;
     if (!(((bitcast<u32>(r.x) & 0x7f800000u) != 0x7f800000u) && ((bitcast<u32>(r.y) & 0x7f800000u) != 0x7f800000u) && ((bitcast<u32>(r.z) & 0x7f800000u) != 0x7f800000u) && ((bitcast<u32>(r.pdf) & 0x7f800000u) != 0x7f800000u) && r.pdf > 0.0f)) {
         return diffbsdf_tiny_half_vector_none();
     }

@@ -67,6 +67,21 @@ struct diffbsdf_tiny_half_vector_Frame {
     float c;
     float s;
 };
+// The direction a sample returns (x, y, z), read back as pdf() reads it: in the
+// incident frame (lx, ly, lz), its chart point (ya, yb), its flow point (fa, fb).
+struct diffbsdf_tiny_half_vector_Returned {
+    float x;
+    float y;
+    float z;
+    float lx;
+    float ly;
+    float lz;
+    float ya;
+    float yb;
+    float fa;
+    float fb;
+    bool ok;
+};
 // A direction and its PDF; all zero when invalid.
 struct diffbsdf_tiny_half_vector_Result {
     float x;
@@ -435,7 +450,89 @@ diffbsdf_tiny_half_vector_Result diffbsdf_tiny_half_vector_direction_impl(uint b
     return r;
 }
 
-// x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x).
+// The direction returned for the flow's end point (ea, eb), and that direction as
+// pdf() reads it: in the incident frame (lx, ly, lz), its chart point (ya, yb) and
+// its flow point (fa, fb). ok = false where any of these fails.
+diffbsdf_tiny_half_vector_Returned diffbsdf_tiny_half_vector_returned(diffbsdf_tiny_half_vector_Cond cond, float ea, float eb, float lwx, float lwy, float lwz, diffbsdf_tiny_half_vector_Frame fr) {
+    precise diffbsdf_tiny_half_vector_Returned q;
+    q.x = 0.0;
+    q.y = 0.0;
+    q.z = 0.0;
+    q.lx = 0.0;
+    q.ly = 0.0;
+    q.lz = 0.0;
+    q.ya = 0.0;
+    q.yb = 0.0;
+    q.fa = 0.0;
+    q.fb = 0.0;
+    q.ok = false;
+    precise float a = ea;
+    precise float b = eb;
+    // The end point in chart coordinates: x = mu + sigma z (docs/math.md, (61)).
+    a = cond.p0 + exp(cond.p2) * diffbsdf_tiny_half_vector_warp_expand(a);
+    b = cond.p1 + exp(cond.p3) * diffbsdf_tiny_half_vector_warp_expand(b);
+    precise diffbsdf_tiny_half_vector_Result r = diffbsdf_tiny_half_vector_to_direction(a, b, lwx, lwy, lwz);
+    if (!(r.pdf > 0.0)) {
+        return q;
+    }
+    precise float rx = fr.c * r.x - fr.s * r.y;
+    r.y = fr.s * r.x + fr.c * r.y;
+    r.x = rx;
+    q.x = r.x;
+    q.y = r.y;
+    q.z = r.z;
+    precise diffbsdf_tiny_half_vector_Unit wo = diffbsdf_tiny_half_vector_unit(r.x, r.y, r.z);
+    if (!wo.ok) {
+        return q;
+    }
+    precise float lox = fr.c * wo.x + fr.s * wo.y;
+    precise float loy = fr.c * wo.y - fr.s * wo.x;
+    if (!(wo.z > 0.0)) {
+        return q;
+    }
+    precise float sx = lwx + lox;
+    precise float sy = lwy + loy;
+    precise float sz = lwz + wo.z;
+    precise float rho = sqrt(lwx * lwx + lwy * lwy);
+    if (rho > 0.0) {
+        precise float hc = lwx / rho;
+        precise float hs = lwy / rho;
+        precise float ht = hc * lox + hs * loy;
+        precise float hp = hc * loy - hs * lox;
+        precise float st = rho + ht;
+        if (ht < 0.0 && rho - ht > 1.0) {
+            st = (hp * hp + (wo.z * wo.z - lwz * lwz)) / (rho - ht);
+        }
+        sx = hc * st - hs * hp;
+        sy = hs * st + hc * hp;
+    }
+    precise float slen = sqrt(sx * sx + sy * sy + sz * sz);
+    if (!(slen > 0.0)) {
+        return q;
+    }
+    precise float sinv = 1.0 / slen;
+    if (!(sz * sinv > 0.0)) {
+        return q;
+    }
+    precise float ya = sx * sinv;
+    precise float yb = sy * sinv;
+    precise float za = diffbsdf_tiny_half_vector_warp_compress((ya - cond.p0) * exp(-cond.p2));
+    precise float zb = diffbsdf_tiny_half_vector_warp_compress((yb - cond.p1) * exp(-cond.p3));
+    q.lx = lox;
+    q.ly = loy;
+    q.lz = wo.z;
+    q.ya = ya;
+    q.yb = yb;
+    q.fa = za;
+    q.fb = zb;
+    q.ok = true;
+    return q;
+}
+
+// x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x),
+// at the flow point pdf() reads for the direction returned: the start point moved by
+// M^-1 (end - x_N), M = prod (I + h J_k), and where it moves by more than 0.000003 (1 + |x0|),
+// a second pass from it for the determinants (docs/math.md, (71), (72)).
 diffbsdf_tiny_half_vector_Result diffbsdf_tiny_half_vector_sample_impl(uint base, float wx, float wy, float wz, float u0, float u1, uint steps) {
     precise diffbsdf_tiny_half_vector_Unit wi = diffbsdf_tiny_half_vector_unit(wx, wy, wz);
     if (!(wi.ok && wi.z >= 0.0 && ((floatBitsToUint(u0) & 0x7f800000u) != 0x7f800000u) && u0 >= 0.0 && u0 <= 1.0 && ((floatBitsToUint(u1) & 0x7f800000u) != 0x7f800000u) && u1 >= 0.0 && u1 <= 1.0)) {
@@ -457,48 +554,92 @@ diffbsdf_tiny_half_vector_Result diffbsdf_tiny_half_vector_sample_impl(uint base
     precise diffbsdf_tiny_half_vector_Vec2 x0 = diffbsdf_tiny_half_vector_base_sample(u0, u1);
     precise float a = x0.x;
     precise float b = x0.y;
+    precise float sa = a;
+    precise float sb = b;
     precise float ln_det = 0.0;
-    for (uint k = 0u; k < n; k++) {
-        precise float t = float(k) * h;
-        precise diffbsdf_tiny_half_vector_Jac j = diffbsdf_tiny_half_vector_velocity_jacobian(base, cond, t, a, b);
-        precise float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
-        if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {
+    precise float m00 = 1.0;
+    precise float m01 = 0.0;
+    precise float m10 = 0.0;
+    precise float m11 = 1.0;
+    precise diffbsdf_tiny_half_vector_Returned q;
+    for (uint pass_no = 0u; pass_no < 2u; pass_no++) {
+        a = sa;
+        b = sb;
+        ln_det = 0.0;
+        m00 = 1.0;
+        m01 = 0.0;
+        m10 = 0.0;
+        m11 = 1.0;
+        for (uint k = 0u; k < n; k++) {
+            precise float t = float(k) * h;
+            precise diffbsdf_tiny_half_vector_Jac j = diffbsdf_tiny_half_vector_velocity_jacobian(base, cond, t, a, b);
+            precise float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
+            if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {
+                return diffbsdf_tiny_half_vector_none();
+            }
+            ln_det = ln_det + log(det);
+            // M = (I + h J) M.
+            precise float a00 = 1.0 + h * j.j00;
+            precise float a01 = h * j.j01;
+            precise float a10 = h * j.j10;
+            precise float a11 = 1.0 + h * j.j11;
+            precise float n00 = a00 * m00 + a01 * m10;
+            precise float n01 = a00 * m01 + a01 * m11;
+            m10 = a10 * m00 + a11 * m10;
+            m11 = a10 * m01 + a11 * m11;
+            m00 = n00;
+            m01 = n01;
+            a = a + h * j.v0;
+            b = b + h * j.v1;
+        }
+        if (pass_no == 1u) {
+            break;
+        }
+        q = diffbsdf_tiny_half_vector_returned(cond, a, b, lwx, lwy, lwz, fr);
+        if (!q.ok) {
             return diffbsdf_tiny_half_vector_none();
         }
-        ln_det = ln_det + log(det);
-        a = a + h * j.v0;
-        b = b + h * j.v1;
+        // dx0 = M^-1 (end - x_N) by the 2x2 adjugate (docs/math.md, (71)).
+        precise float d0 = q.fa - a;
+        precise float d1 = q.fb - b;
+        precise float mdet = m00 * m11 - m01 * m10;
+        precise float dx0 = (m11 * d0 - m01 * d1) / mdet;
+        precise float dx1 = (m00 * d1 - m10 * d0) / mdet;
+        if (!(((floatBitsToUint(dx0) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(dx1) & 0x7f800000u) != 0x7f800000u))) {
+            break;
+        }
+        precise float size = max(abs(dx0), abs(dx1));
+        precise float scale = 1.0 + max(abs(sa), abs(sb));
+        sa = sa + dx0;
+        sb = sb + dx1;
+        if (size <= 3e-6 * scale) {
+            break;
+        }
     }
     // ln |dz/dy| of the warp at the end point joins the steps' sum (docs/math.md, (66)).
-    ln_det = ln_det + (diffbsdf_tiny_half_vector_warp_ln_expansion(a) + diffbsdf_tiny_half_vector_warp_ln_expansion(b));
-    // The end point in chart coordinates: x = mu + sigma z (docs/math.md, (61)).
-    a = cond.p0 + exp(cond.p2) * diffbsdf_tiny_half_vector_warp_expand(a);
-    b = cond.p1 + exp(cond.p3) * diffbsdf_tiny_half_vector_warp_expand(b);
-    precise diffbsdf_tiny_half_vector_Result r = diffbsdf_tiny_half_vector_to_direction(a, b, lwx, lwy, lwz);
-    if (!(r.pdf > 0.0)) {
-        return diffbsdf_tiny_half_vector_none();
-    }
-    precise float sx = lwx + r.x;
-    precise float sy = lwy + r.y;
-    precise float sz = lwz + r.z;
+    ln_det = ln_det + (diffbsdf_tiny_half_vector_warp_ln_expansion(q.fa) + diffbsdf_tiny_half_vector_warp_ln_expansion(q.fb));
+    precise float sx = lwx + q.lx;
+    precise float sy = lwy + q.ly;
+    precise float sz = lwz + q.lz;
     precise float rho = sqrt(lwx * lwx + lwy * lwy);
     if (rho > 0.0) {
         precise float hc = lwx / rho;
         precise float hs = lwy / rho;
-        precise float ht = hc * r.x + hs * r.y;
-        precise float hp = hc * r.y - hs * r.x;
+        precise float ht = hc * q.lx + hs * q.ly;
+        precise float hp = hc * q.ly - hs * q.lx;
         precise float st = rho + ht;
         if (ht < 0.0 && rho - ht > 1.0) {
-            st = (hp * hp + (r.z * r.z - lwz * lwz)) / (rho - ht);
+            st = (hp * hp + (q.lz * q.lz - lwz * lwz)) / (rho - ht);
         }
         sx = hc * st - hs * hp;
         sy = hs * st + hc * hp;
     }
-    precise float ln_pdf = diffbsdf_tiny_half_vector_base_ln_pdf(cond, x0.x, x0.y) - ln_det + log(sz / (2.0 * (sx * sx + sy * sy + sz * sz)));
+    precise float ln_pdf = diffbsdf_tiny_half_vector_base_ln_pdf(cond, sa, sb) - ln_det + log(sz / (2.0 * (sx * sx + sy * sy + sz * sz)));
+    precise diffbsdf_tiny_half_vector_Result r;
+    r.x = q.x;
+    r.y = q.y;
+    r.z = q.z;
     r.pdf = exp(ln_pdf);
-    precise float rx = fr.c * r.x - fr.s * r.y;
-    r.y = fr.s * r.x + fr.c * r.y;
-    r.x = rx;
     if (!(((floatBitsToUint(r.x) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.y) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.z) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.pdf) & 0x7f800000u) != 0x7f800000u) && r.pdf > 0.0)) {
         return diffbsdf_tiny_half_vector_none();
     }

@@ -63,6 +63,21 @@ struct diffbsdf_tiny_sphere_Root {
     float va;
     float vb;
 };
+// The direction a sample returns (x, y, z), read back as pdf() reads it: in the
+// incident frame (lx, ly, lz), its chart point (ya, yb), its flow point (fa, fb).
+struct diffbsdf_tiny_sphere_Returned {
+    float x;
+    float y;
+    float z;
+    float lx;
+    float ly;
+    float lz;
+    float ya;
+    float yb;
+    float fa;
+    float fb;
+    bool ok;
+};
 // A direction and its PDF; all zero when invalid.
 struct diffbsdf_tiny_sphere_Result {
     float x;
@@ -395,7 +410,56 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_direction_impl(uint base, float
     return diffbsdf_tiny_sphere_to_direction(a, b);
 }
 
-// x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x).
+// The direction returned for the flow's end point (ea, eb), and that direction as
+// pdf() reads it: in the incident frame (lx, ly, lz), its chart point (ya, yb) and
+// its flow point (fa, fb). ok = false where any of these fails.
+diffbsdf_tiny_sphere_Returned diffbsdf_tiny_sphere_returned(float ea, float eb) {
+    precise diffbsdf_tiny_sphere_Returned q;
+    q.x = 0.0;
+    q.y = 0.0;
+    q.z = 0.0;
+    q.lx = 0.0;
+    q.ly = 0.0;
+    q.lz = 0.0;
+    q.ya = 0.0;
+    q.yb = 0.0;
+    q.fa = 0.0;
+    q.fb = 0.0;
+    q.ok = false;
+    precise float a = ea;
+    precise float b = eb;
+    precise diffbsdf_tiny_sphere_Result r = diffbsdf_tiny_sphere_to_direction(a, b);
+    if (!(r.pdf > 0.0)) {
+        return q;
+    }
+    q.x = r.x;
+    q.y = r.y;
+    q.z = r.z;
+    precise diffbsdf_tiny_sphere_Unit wo = diffbsdf_tiny_sphere_unit(r.x, r.y, r.z);
+    if (!wo.ok) {
+        return q;
+    }
+    precise float rho = sqrt(wo.x * wo.x + wo.y * wo.y);
+    if (!(rho > 0.0)) {
+        return q;
+    }
+    precise float ya = atan(rho, wo.z);
+    precise float yb = atan(wo.y, wo.x);
+    q.lx = wo.x;
+    q.ly = wo.y;
+    q.lz = wo.z;
+    q.ya = ya;
+    q.yb = yb;
+    q.fa = ya;
+    q.fb = yb;
+    q.ok = true;
+    return q;
+}
+
+// x_N and sum_k ln det(I + h dv/dx(x_k)); pdf = p0(x0) / prod det * (pdf_w / pdf_x),
+// at the flow point pdf() reads for the direction returned: the start point moved by
+// M^-1 (end - x_N), M = prod (I + h J_k), and where it moves by more than 0.000003 (1 + |x0|),
+// a second pass from it for the determinants (docs/math.md, (71), (72)).
 diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx, float wy, float wz, float u0, float u1, uint steps) {
     precise diffbsdf_tiny_sphere_Unit wi = diffbsdf_tiny_sphere_unit(wx, wy, wz);
     if (!(wi.ok && ((floatBitsToUint(u0) & 0x7f800000u) != 0x7f800000u) && u0 >= 0.0 && u0 <= 1.0 && ((floatBitsToUint(u1) & 0x7f800000u) != 0x7f800000u) && u1 >= 0.0 && u1 <= 1.0)) {
@@ -413,23 +477,73 @@ diffbsdf_tiny_sphere_Result diffbsdf_tiny_sphere_sample_impl(uint base, float wx
     precise diffbsdf_tiny_sphere_Vec2 x0 = diffbsdf_tiny_sphere_base_sample(cond, u0, u1);
     precise float a = x0.x;
     precise float b = diffbsdf_tiny_sphere_wrap(x0.y);
+    precise float sa = a;
+    precise float sb = b;
     precise float ln_det = 0.0;
-    for (uint k = 0u; k < n; k++) {
-        precise float t = float(k) * h;
-        precise diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
-        precise float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
-        if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {
+    precise float m00 = 1.0;
+    precise float m01 = 0.0;
+    precise float m10 = 0.0;
+    precise float m11 = 1.0;
+    precise diffbsdf_tiny_sphere_Returned q;
+    for (uint pass_no = 0u; pass_no < 2u; pass_no++) {
+        a = sa;
+        b = sb;
+        ln_det = 0.0;
+        m00 = 1.0;
+        m01 = 0.0;
+        m10 = 0.0;
+        m11 = 1.0;
+        for (uint k = 0u; k < n; k++) {
+            precise float t = float(k) * h;
+            precise diffbsdf_tiny_sphere_Jac j = diffbsdf_tiny_sphere_velocity_jacobian(base, cond, t, a, b);
+            precise float det = (1.0 + h * j.j00) * (1.0 + h * j.j11) - (h * j.j01) * (h * j.j10);
+            if (!(((floatBitsToUint(det) & 0x7f800000u) != 0x7f800000u) && det > 0.0)) {
+                return diffbsdf_tiny_sphere_none();
+            }
+            ln_det = ln_det + log(det);
+            // M = (I + h J) M.
+            precise float a00 = 1.0 + h * j.j00;
+            precise float a01 = h * j.j01;
+            precise float a10 = h * j.j10;
+            precise float a11 = 1.0 + h * j.j11;
+            precise float n00 = a00 * m00 + a01 * m10;
+            precise float n01 = a00 * m01 + a01 * m11;
+            m10 = a10 * m00 + a11 * m10;
+            m11 = a10 * m01 + a11 * m11;
+            m00 = n00;
+            m01 = n01;
+            a = a + h * j.v0;
+            b = diffbsdf_tiny_sphere_wrap(b + h * j.v1);
+        }
+        if (pass_no == 1u) {
+            break;
+        }
+        q = diffbsdf_tiny_sphere_returned(a, b);
+        if (!q.ok) {
             return diffbsdf_tiny_sphere_none();
         }
-        ln_det = ln_det + log(det);
-        a = a + h * j.v0;
-        b = diffbsdf_tiny_sphere_wrap(b + h * j.v1);
+        // dx0 = M^-1 (end - x_N) by the 2x2 adjugate (docs/math.md, (71)).
+        precise float d0 = q.fa - a;
+        precise float d1 = diffbsdf_tiny_sphere_wrap(q.fb - b);
+        precise float mdet = m00 * m11 - m01 * m10;
+        precise float dx0 = (m11 * d0 - m01 * d1) / mdet;
+        precise float dx1 = (m00 * d1 - m10 * d0) / mdet;
+        if (!(((floatBitsToUint(dx0) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(dx1) & 0x7f800000u) != 0x7f800000u))) {
+            break;
+        }
+        precise float size = max(abs(dx0), abs(dx1));
+        precise float scale = 1.0 + max(abs(sa), abs(sb));
+        sa = sa + dx0;
+        sb = diffbsdf_tiny_sphere_wrap(sb + dx1);
+        if (size <= 3e-6 * scale) {
+            break;
+        }
     }
-    precise diffbsdf_tiny_sphere_Result r = diffbsdf_tiny_sphere_to_direction(a, b);
-    if (!(r.pdf > 0.0)) {
-        return diffbsdf_tiny_sphere_none();
-    }
-    precise float ln_pdf = diffbsdf_tiny_sphere_base_ln_pdf(cond, x0.x, x0.y) - ln_det + -log(sin(a));
+    precise float ln_pdf = diffbsdf_tiny_sphere_base_ln_pdf(cond, sa, sb) - ln_det + -log(sin(q.ya));
+    precise diffbsdf_tiny_sphere_Result r;
+    r.x = q.x;
+    r.y = q.y;
+    r.z = q.z;
     r.pdf = exp(ln_pdf);
     if (!(((floatBitsToUint(r.x) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.y) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.z) & 0x7f800000u) != 0x7f800000u) && ((floatBitsToUint(r.pdf) & 0x7f800000u) != 0x7f800000u) && r.pdf > 0.0)) {
         return diffbsdf_tiny_sphere_none();
