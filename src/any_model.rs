@@ -34,6 +34,13 @@ macro_rules! with_model {
 pub(crate) use with_model;
 
 impl AnyModel {
+    /// The velocity-net depths the kernel compiles (hidden layers of width 32), shallowest
+    /// first: what a trainer may give a student.
+    pub const VELOCITY_HIDDEN_LAYERS: [u8; 2] = [
+        Model3x32::VELOCITY_HIDDEN_LAYERS,
+        Model4x32::VELOCITY_HIDDEN_LAYERS,
+    ];
+
     /// Whether some compiled shape accepts a model of definition `def`.
     #[must_use]
     pub const fn accepts(def: &ModelDef) -> bool {

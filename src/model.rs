@@ -39,6 +39,9 @@ impl<
         const VM: usize,
     > Model<BE, BW, BM, VE, VW, VM>
 {
+    /// Hidden layers of this type's velocity net (`ModelDef`'s `velocity.hidden_layers`).
+    pub const VELOCITY_HIDDEN_LAYERS: u8 = (VM + 1) as u8;
+
     /// Whether a model of definition `def` has this type's compiled shape.
     #[must_use]
     pub const fn accepts(def: &ModelDef) -> bool {

@@ -29,7 +29,7 @@ pub struct CurveArgs {
     pub teacher_iters: Vec<usize>,
     /// Hidden layers of the student's velocity net, one fit each (the model-size axis; the
     /// kernel compiles 3 and 4 layers of 32).
-    #[arg(long, value_delimiter = ',', default_value = "4")]
+    #[arg(long, value_delimiter = ',', default_value = "4", value_parser = super::depth::parse_student_layers)]
     pub student_layers: Vec<u8>,
     /// Start from the quick recipe (`fit --quick`) instead of the standard one.
     #[arg(long, conflicts_with = "tiny")]

@@ -132,7 +132,7 @@ pub struct FitArgs {
     pub teacher_layers: Option<usize>,
     /// Hidden layers of the student's velocity net, 3 or 4 (the depths of 32 the kernel
     /// compiles; default 3 on the disk and the half-vector chart, 4 on the sphere).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(3..=4))]
+    #[arg(long, value_parser = super::depth::parse_student_layers)]
     pub student_layers: Option<u8>,
     /// Reflow pairs.
     #[arg(long)]

@@ -6,6 +6,7 @@ pub mod choose;
 pub mod codegen;
 pub mod curve;
 pub mod demo;
+pub mod depth;
 pub mod eval;
 pub mod fit;
 pub mod material;
