@@ -120,8 +120,7 @@ impl<
         let wo = frame.to_world(wo);
         // The density at the returned `wo` as `pdf` reads it: its flow point `end`, the start
         // point reaching it (docs/math.md, (71), (72)), the measure at `wo` itself.
-        let back = frame.to_local(unit_direction(wo)?);
-        let y = self.def.domain.point_of(back, wi)?;
+        let (back, y) = self.read_back(frame, wo, wi)?;
         let end = self.flow_point(&c, y);
         let (x0, ln_det) = self.returned_start(&c, &pass, end, steps)?;
         // The warp's end term joins the steps' sum (docs/math.md, (66)).
@@ -142,12 +141,11 @@ impl<
 
     #[inline(always)]
     fn pdf_inner(&self, wi: Vec3, wo: Vec3, steps: u32) -> Option<f32> {
-        let (wi, wo) = (self.incident(wi)?, unit_direction(wo)?);
+        let wi = self.incident(wi)?;
         let steps = self.resolve_steps(steps)?;
         let domain = self.def.domain;
         let (frame, wi) = self.incident_frame(wi);
-        let wo = frame.to_local(wo);
-        let y = domain.point_of(wo, wi)?;
+        let (wo, y) = self.read_back(frame, wo, wi)?;
         let c = self.condition(wi);
         let end = self.flow_point(&c, y);
         let (x0, ln_det) = self.flow_inverse(&c, end, steps)?;
@@ -155,6 +153,15 @@ impl<
         let ln_pdf = self.start_ln_pdf(&c, x0) - ln_det + domain.ln_measure(y, wo, wi);
         let pdf = exp(ln_pdf);
         pdf.is_finite().then_some(pdf)
+    }
+
+    /// A world direction as `pdf` reads it: normalised ([`unit_direction`]), in the
+    /// incident frame, and its chart point; `None` where it is not a unit direction or the
+    /// domain has no density there. `sample` reads its own result back the same way.
+    #[inline(always)]
+    fn read_back(&self, frame: IncidentFrame, wo: Vec3, wi: Vec3) -> Option<(Vec3, [f32; 2])> {
+        let wo = frame.to_local(unit_direction(wo)?);
+        Some((wo, self.def.domain.point_of(wo, wi)?))
     }
 
     /// `wi` normalised, or `None` if invalid or outside the model's declared incident
