@@ -237,7 +237,10 @@ fn avx2_and_baseline_copies_give_the_same_bits() {
     );
     let (wi, u) = inputs(N);
     // The disk, and the sphere chart's trigonometry.
-    for name in ["conductor-ggx-a0.3-cu-disk", "rgl-vch-golden-yellow-sphere"] {
+    for name in [
+        "conductor-ggx-a0.3-cu-disk",
+        "dielectric-beckmann-a0.3-sphere",
+    ] {
         let m = shipped(name);
         let fast = all_outputs(m, &wi, &u);
         force_baseline(true);

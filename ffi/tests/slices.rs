@@ -57,7 +57,10 @@ fn slice_batches_equal_the_kernel_batches_bit_for_bit() {
     let (wi, u) = rows::inputs(N, true);
     let wi: Vec<Vec3> = wi.chunks_exact(3).map(Vec3::from_slice).collect();
     let u: Vec<Vec2> = u.chunks_exact(2).map(Vec2::from_slice).collect();
-    for name in ["conductor-ggx-a0.3-cu-disk", "rgl-vch-golden-yellow-sphere"] {
+    for name in [
+        "conductor-ggx-a0.3-cu-disk",
+        "dielectric-beckmann-a0.3-sphere",
+    ] {
         let m = load(name);
         let want = kernel_outputs(&m, &wi, &u);
         let valid = want[3 * N..6 * N]
