@@ -96,14 +96,13 @@ fn a_mixed_set_compiles_with_one_buffer_per_architecture() {
         let o = buffer_options(Language::Glsl, entry_points);
         let set = generate_set(&mats, &o).expect("generate");
         // The shipped models: isotropic disk, isotropic sphere for every wi (dielectrics,
-        // principled), isotropic sphere above the surface only (copper), anisotropic
-        // sphere above the surface only, isotropic half-vector chart in warped standard
-        // coordinates (measured), in uncompressed ones (rough copper) and anisotropic
-        // half-vector chart (the anisotropic copper).
-        assert_eq!(set.buffers.len(), 7, "one group per architecture");
+        // principled), isotropic sphere above the surface only (copper), isotropic
+        // half-vector chart in warped standard coordinates (measured), in uncompressed
+        // ones (rough copper) and anisotropic half-vector chart (the anisotropic copper).
+        assert_eq!(set.buffers.len(), 6, "one group per architecture");
         assert_eq!(
             set.buffers.iter().map(|b| b.binding).collect::<Vec<_>>(),
-            vec![4, 5, 6, 7, 8, 9, 10]
+            vec![4, 5, 6, 7, 8, 9]
         );
         assert_eq!(
             set.code.contains("velocity_jacobian"),

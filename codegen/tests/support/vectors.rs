@@ -117,8 +117,8 @@ fn named(mut def: ModelDef, name: &str, precision: Precision) -> ModelDef {
 
 /// The random-weight models every conformance test runs (the paper's disk and sphere
 /// architectures, f32 and f16 weights, isotropic and not), and every shipped model in
-/// `models/`. The isotropic disk models come first: the GPU test's default run executes the
-/// first architecture group only (`tests/gpu.rs`), and every shipped disk model is isotropic.
+/// `models/`. The GPU test (`tests/gpu.rs`) compiles one pipeline per architecture and
+/// runs every model of that shape through it.
 pub fn test_models() -> Vec<TestModel> {
     let iso = |mut d: ModelDef| {
         d.isotropic = true;
@@ -247,6 +247,20 @@ pub fn test_models() -> Vec<TestModel> {
                     Precision::F16,
                 ),
                 22,
+                1.2,
+            ),
+        },
+        // Anisotropic, on the sphere, declared for the upper hemisphere, f16 weights: no
+        // shipped model has this combination.
+        TestModel {
+            name: "random_sphere_aniso_upper_f16".into(),
+            blob: random_blob(
+                &named(
+                    upper(sphere),
+                    "random_sphere_aniso_upper_f16",
+                    Precision::F16,
+                ),
+                23,
                 1.2,
             ),
         },
