@@ -22,6 +22,8 @@ pub const DEFAULT_SAMPLES: usize = 1_000_000;
 
 /// The rounding allowance of the sweep: the kernel's promise, as in the tests.
 const SPAN: f32 = diffbsdf::spec::PDF_ROUNDING_SPAN;
+/// The plain tolerance (relative) the shipped models are held to.
+const TOL: f32 = diffbsdf::spec::PDF_CONSISTENCY_TOL;
 
 /// What the sweep of one precision found.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
@@ -132,14 +134,21 @@ impl Exactness {
     pub fn summary(&self) -> String {
         let one = |s: &Sweep| {
             format!(
-                "{} valid, pdf() = 0 on {}, inexact {}, folded {}, other {}; worst rel {:.1e} (past 1e-4 within rounding: {}, at most {:.1} x the rounding change of {SPAN} allowed), min det {:.3}",
+                "{} valid, pdf() = 0 on {}, inexact {}, folded {}, other {}; worst rel {:.1e} (past {TOL:e} within rounding: {}, at most {:.1} x the rounding change of {SPAN} allowed), min det {:.3}",
                 s.valid, s.zero_pdf, s.inexact, s.folded, s.other, s.worst_rel, s.past_plain_tol, s.worst_over_rounding, s.min_det
             )
         };
+        let past = self.f32.past_plain_tol + self.f16.past_plain_tol;
+        let verdict = match (self.passes(), past) {
+            (false, _) => "NOT EXACT".to_string(),
+            (true, 0) => "exact".to_string(),
+            // Accepted (`fit` ships it), but short of the shipped models' bar of none past
+            // the plain tolerance (models/README.md, "Exactness of the inverse").
+            (true, n) => format!("exact within f32 rounding ({n} past {TOL:e})"),
+        };
         let mut text = format!(
-            "exactness at N={} -> {}\n  f32: {}\n  f16: {}\n",
+            "exactness at N={} -> {verdict}\n  f32: {}\n  f16: {}\n",
             self.steps,
-            if self.passes() { "exact" } else { "NOT EXACT" },
             one(&self.f32),
             one(&self.f16)
         );
