@@ -30,6 +30,7 @@ pub mod lambertian;
 pub mod microfacet;
 pub mod plastic;
 pub mod principled;
+pub mod radial;
 pub mod rgb;
 pub mod rgl;
 pub mod spec;

@@ -286,6 +286,21 @@ pub fn parse_spec(spec: &str) -> Result<Box<dyn Material>, SpecError> {
                 value: rest.into(),
             })?)
         }
+        "radial" => {
+            let bad = |v: &str| SpecError::BadValue {
+                key: "radial".into(),
+                value: v.into(),
+            };
+            let mut parts = rest.splitn(3, ':');
+            let (Some(eps), Some(theta), Some(inner)) = (parts.next(), parts.next(), parts.next())
+            else {
+                return Err(bad(rest));
+            };
+            let eps: f64 = eps.parse().map_err(|_| bad(eps))?;
+            let theta: f64 = theta.parse().map_err(|_| bad(theta))?;
+            let inner = parse_spec(inner)?;
+            Box::new(crate::radial::Radial::new(inner, eps, theta).ok_or_else(|| bad(rest))?)
+        }
         _ => return Err(SpecError::UnknownModel(model)),
     };
     Ok(m)
