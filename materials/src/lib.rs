@@ -24,6 +24,7 @@
 
 pub mod conductor;
 pub mod dielectric;
+pub mod disk_view;
 pub mod fresnel;
 pub mod halfway;
 pub mod lambertian;
