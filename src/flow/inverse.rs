@@ -9,7 +9,9 @@
 use super::{step_det, step_time, Conditioned};
 use crate::math::ln;
 use crate::model::Model;
-use crate::spec::{DET_REUSE_TOL, LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL};
+use crate::spec::{
+    DET_REUSE_TOL, DET_SECANT_TOL, LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL,
+};
 
 impl<
         const BE: usize,
@@ -90,6 +92,9 @@ impl<
     fn newton(&self, step: &[f32; VW], mut x: [f32; 2], y: [f32; 2], h: f32) -> Option<Root> {
         let domain = self.def.domain;
         let mut at = self.residual(step, x, y, h);
+        // The determinant at the iterate before `x` and the length of the step taken from
+        // it (0: `x` is the start).
+        let (mut prev_det, mut prev_step) = (0.0f32, 0.0f32);
         for _ in 0..NEWTON_MAX_ITERS {
             let (r, j, det) = (at.r, at.j, at.det);
             let d = if det > 0.0 {
@@ -117,9 +122,11 @@ impl<
                 // determinant is taken at the returned point, as the forward pass takes it
                 // at x_k: where the flow compresses (det << 1) the one at an iterate farther
                 // away differs by more than rounding. Where the update is about one rounding
-                // of `x` (DET_REUSE_TOL), the evaluation at `x` stands for it.
+                // of `x` (DET_REUSE_TOL), or the determinant changes by less than
+                // DET_SECANT_TOL over it, the evaluation at `x` stands for it.
                 let next = domain.advance(x, [-d[0], -d[1]]);
-                let fin = if size <= DET_REUSE_TOL * scale {
+                let flat = det_flat(at.det, prev_det, size, prev_step);
+                let fin = if size <= DET_REUSE_TOL * scale || flat {
                     at
                 } else {
                     self.residual(step, next, y, h)
@@ -145,6 +152,7 @@ impl<
                 lambda *= 0.5;
                 halvings += 1;
             };
+            (prev_det, prev_step) = (at.det, lambda * size);
             (x, at) = (trial, next);
             if lambda * size <= NEWTON_TOL * scale && at.det > 0.0 {
                 // The step just taken was below the f32 noise of `x + h v(x)`: converged,
@@ -174,6 +182,19 @@ impl<
             det: step_det(h, &j),
         }
     }
+}
+
+/// Whether the determinant changes by at most `DET_SECANT_TOL` (relative) over Newton's
+/// last update of length `size`, extrapolated from its change from `prev_det` to `det`
+/// over the step of length `prev_step` before it (docs/math.md, "Determinant at the
+/// returned point"); false where there was no step before or either determinant is not
+/// positive.
+#[inline(always)]
+fn det_flat(det: f32, prev_det: f32, size: f32, prev_step: f32) -> bool {
+    det > 0.0
+        && prev_det > 0.0
+        && prev_step > 0.0
+        && ((det - prev_det).abs() / det) * (size / prev_step) <= DET_SECANT_TOL
 }
 
 /// One step's solution: `x_k`, `det(I + h dv/dx(x_k))` and `v(x_k, t_k)`.

@@ -4,7 +4,8 @@
 use super::Emitter;
 use crate::dialect::{Math, T};
 use diffbsdf::spec::{
-    DET_REUSE_TOL, LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16,
+    DET_REUSE_TOL, DET_SECANT_TOL, LINE_SEARCH_HALVINGS, NEWTON_MAX_ITERS, NEWTON_TOL,
+    NEWTON_TOL_F16,
 };
 
 impl Emitter<'_> {
@@ -106,6 +107,11 @@ impl Emitter<'_> {
         for v in ["d0", "d1", "size", "scale", "norm"] {
             self.decl(T::F, v, &zero);
         }
+        // The determinant at (a, b) while a step from it is searched, then at the iterate
+        // before (a, b) and the length of the step taken from it (0: (a, b) is the start).
+        for v in ["cdet", "pdet", "pstep"] {
+            self.decl(T::F, v, &zero);
+        }
         self.decl(T::F, "lambda", &one);
         self.decl(T::U, "mode", &self.u(0));
         self.decl(T::U, "it", &self.u(0));
@@ -142,6 +148,8 @@ impl Emitter<'_> {
         self.step_to("pa", "pb", "lambda * ");
         self.code.line("continue;");
         self.code.close("}");
+        self.code.line("pdet = cdet;");
+        self.code.line("pstep = lambda * size;");
         self.code.line("a = pa;");
         self.code.line("b = pb;");
         self.code.open(format!(
@@ -194,10 +202,22 @@ impl Emitter<'_> {
         self.code.line(
             "// returned point, where the forward pass takes it (at x itself where the update",
         );
-        self.code.line("// is about one rounding of x).");
+        self.code.line(
+            "// is about one rounding of x, or where det changes by less than the secant bound",
+        );
+        self.code.line("// over it).");
         self.step_to("x.a", "x.b", "");
         let reuse = self.f(DET_REUSE_TOL);
-        self.code.open(format!("if (size > {reuse} * scale) {{"));
+        let secant = self.f(DET_SECANT_TOL);
+        let change = format!("({} / at.det) * (size / pstep)", abs(self, "at.det - pdet"));
+        self.code.line(
+            "// det's change over the update, extrapolated from its change over the step before.",
+        );
+        let flat =
+            format!("at.det > {zero} && pdet > {zero} && pstep > {zero} && {change} <= {secant}");
+        self.decl(T::B, "det_flat", &flat);
+        self.code
+            .open(format!("if (size > {reuse} * scale && !det_flat) {{"));
         self.code.line("pa = x.a;");
         self.code.line("pb = x.b;");
         self.code.line(format!("mode = {};", self.u(2)));
@@ -215,6 +235,7 @@ impl Emitter<'_> {
             abs(self, "at.r0"),
             abs(self, "at.r1")
         ));
+        self.code.line("cdet = at.det;");
         self.code.line(format!("lambda = {one};"));
         self.code.line(format!("ls = {};", self.u(0)));
         self.step_to("pa", "pb", "");

@@ -5,10 +5,10 @@
 use crate::desc::tests::blob;
 use crate::{generate, Float, Language, Options};
 use diffbsdf::spec::{
-    BASE_OUTPUTS, DET_REUSE_TOL, ENCODING_PER_FREQ, ENCODING_RAW, ERFINV_BRANCH_W, ERFINV_CENTRAL,
-    ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT, EXP_ARG_LIMIT_F16, EXP_ARG_MAX,
-    EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI, LN_SCALE_MAX,
-    LN_SCALE_MIN, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO,
+    BASE_OUTPUTS, DET_REUSE_TOL, DET_SECANT_TOL, ENCODING_PER_FREQ, ENCODING_RAW, ERFINV_BRANCH_W,
+    ERFINV_CENTRAL, ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT, EXP_ARG_LIMIT_F16,
+    EXP_ARG_MAX, EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI,
+    LN_SCALE_MAX, LN_SCALE_MIN, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO,
     STANDARD_WARP_K, UNIT_TOLERANCE, VELOCITY_OUTPUTS,
 };
 use diffbsdf::{Domain, ModelDef};
@@ -249,5 +249,18 @@ fn newton_constants_are_the_kernels() {
         assert_eq!(lits(stalled), [tol, 0.0], "{}", o.label);
         let reuse = line(&o, &b, "if (size >");
         assert_eq!(lits(reuse), [DET_REUSE_TOL], "{}", o.label);
+        // The secant bound's line declares `det_flat` (its type is the dialect's).
+        let flat: Vec<&str> = b
+            .iter()
+            .copied()
+            .filter(|l| l.contains("(size / pstep)"))
+            .collect();
+        assert_eq!(flat.len(), 1, "{}: the secant bound", o.label);
+        assert_eq!(
+            lits(flat[0]),
+            [0.0, 0.0, 0.0, DET_SECANT_TOL],
+            "{}",
+            o.label
+        );
     }
 }

@@ -634,6 +634,9 @@ static inline diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_di
     float size = 0.0f;
     float scale = 0.0f;
     float norm = 0.0f;
+    float cdet = 0.0f;
+    float pdet = 0.0f;
+    float pstep = 0.0f;
     float lambda = 1.0f;
     unsigned mode = 0u;
     unsigned it = 0u;
@@ -656,6 +659,8 @@ static inline diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_di
                 pb = b - lambda * d1;
                 continue;
             }
+            pdet = cdet;
+            pstep = lambda * size;
             a = pa;
             b = pb;
             if (lambda * size <= 1e-6f * scale && at.det > 0.0f) {
@@ -687,10 +692,13 @@ static inline diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_di
         if (size <= 1e-6f * scale) {
             /* Converged: the update is below the f32 noise of x + h v(x); det is taken at the */
             /* returned point, where the forward pass takes it (at x itself where the update */
-            /* is about one rounding of x). */
+            /* is about one rounding of x, or where det changes by less than the secant bound */
+            /* over it). */
             x.a = a - d0;
             x.b = b - d1;
-            if (size > 1e-7f * scale) {
+            /* det's change over the update, extrapolated from its change over the step before. */
+            int det_flat = at.det > 0.0f && pdet > 0.0f && pstep > 0.0f && (fabsf(at.det - pdet) / at.det) * (size / pstep) <= 1e-6f;
+            if (size > 1e-7f * scale && !det_flat) {
                 pa = x.a;
                 pb = x.b;
                 mode = 2u;
@@ -704,6 +712,7 @@ static inline diffbsdf_tiny_disk_Root diffbsdf_tiny_disk_newton(diffbsdf_tiny_di
             return x;
         }
         norm = fmaxf(fabsf(at.r0), fabsf(at.r1));
+        cdet = at.det;
         lambda = 1.0f;
         ls = 0u;
         pa = a - d0;

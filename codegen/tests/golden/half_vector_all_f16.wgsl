@@ -705,6 +705,9 @@ fn diffbsdf_tiny_half_vector_newton(cond: diffbsdf_tiny_half_vector_Cond, t: f32
     var size: f32 = 0.0f;
     var scale: f32 = 0.0f;
     var norm: f32 = 0.0f;
+    var cdet: f32 = 0.0f;
+    var pdet: f32 = 0.0f;
+    var pstep: f32 = 0.0f;
     var lambda: f32 = 1.0f;
     var mode: u32 = 0u;
     var it: u32 = 0u;
@@ -727,6 +730,8 @@ fn diffbsdf_tiny_half_vector_newton(cond: diffbsdf_tiny_half_vector_Cond, t: f32
                 pb = b - lambda * d1;
                 continue;
             }
+            pdet = cdet;
+            pstep = lambda * size;
             a = pa;
             b = pb;
             if (lambda * size <= 0.002f * scale && at.det > 0.0f) {
@@ -758,10 +763,13 @@ fn diffbsdf_tiny_half_vector_newton(cond: diffbsdf_tiny_half_vector_Cond, t: f32
         if (size <= 0.002f * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it (at x itself where the update
-            // is about one rounding of x).
+            // is about one rounding of x, or where det changes by less than the secant bound
+            // over it).
             x.a = a - d0;
             x.b = b - d1;
-            if (size > 1e-7f * scale) {
+            // det's change over the update, extrapolated from its change over the step before.
+            var det_flat: bool = at.det > 0.0f && pdet > 0.0f && pstep > 0.0f && (abs(at.det - pdet) / at.det) * (size / pstep) <= 1e-6f;
+            if (size > 1e-7f * scale && !det_flat) {
                 pa = x.a;
                 pb = x.b;
                 mode = 2u;
@@ -775,6 +783,7 @@ fn diffbsdf_tiny_half_vector_newton(cond: diffbsdf_tiny_half_vector_Cond, t: f32
             return x;
         }
         norm = max(abs(at.r0), abs(at.r1));
+        cdet = at.det;
         lambda = 1.0f;
         ls = 0u;
         pa = a - d0;

@@ -683,6 +683,9 @@ diffbsdf_tiny_half_vector_Root diffbsdf_tiny_half_vector_newton(uint base, diffb
     precise float size = 0.0;
     precise float scale = 0.0;
     precise float norm = 0.0;
+    precise float cdet = 0.0;
+    precise float pdet = 0.0;
+    precise float pstep = 0.0;
     precise float lambda = 1.0;
     uint mode = 0u;
     uint it = 0u;
@@ -705,6 +708,8 @@ diffbsdf_tiny_half_vector_Root diffbsdf_tiny_half_vector_newton(uint base, diffb
                 pb = b - lambda * d1;
                 continue;
             }
+            pdet = cdet;
+            pstep = lambda * size;
             a = pa;
             b = pb;
             if (lambda * size <= 1e-6 * scale && at.det > 0.0) {
@@ -736,10 +741,13 @@ diffbsdf_tiny_half_vector_Root diffbsdf_tiny_half_vector_newton(uint base, diffb
         if (size <= 1e-6 * scale) {
             // Converged: the update is below the f32 noise of x + h v(x); det is taken at the
             // returned point, where the forward pass takes it (at x itself where the update
-            // is about one rounding of x).
+            // is about one rounding of x, or where det changes by less than the secant bound
+            // over it).
             x.a = a - d0;
             x.b = b - d1;
-            if (size > 1e-7 * scale) {
+            // det's change over the update, extrapolated from its change over the step before.
+            bool det_flat = at.det > 0.0 && pdet > 0.0 && pstep > 0.0 && (abs(at.det - pdet) / at.det) * (size / pstep) <= 1e-6;
+            if (size > 1e-7 * scale && !det_flat) {
                 pa = x.a;
                 pb = x.b;
                 mode = 2u;
@@ -753,6 +761,7 @@ diffbsdf_tiny_half_vector_Root diffbsdf_tiny_half_vector_newton(uint base, diffb
             return x;
         }
         norm = max(abs(at.r0), abs(at.r1));
+        cdet = at.det;
         lambda = 1.0;
         ls = 0u;
         pa = a - d0;
