@@ -280,6 +280,11 @@ pub struct ModelDef {
     /// coordinates `y = K asinh(z / K)` ([`crate::spec::STANDARD_WARP_K`]; docs/math.md,
     /// §6.4; blob flag bit 3). A header error without `standardized`.
     pub standard_warp: bool,
+    /// With [`ModelDef::standardized`]: `u` is drawn through the latent table, a bilinear
+    /// density on `[0, 1]^2` per incidence slice, fitted to where the flow alone falls short
+    /// (docs/math.md, §6.5; blob flag bit 4; its node values follow the nets' weights). A
+    /// header error without `standardized`.
+    pub latent_table: bool,
     /// A short label (codegen names things after it).
     pub name: ModelName,
 }
@@ -308,6 +313,7 @@ impl ModelDef {
             incident: IncidentRange::UpperHemisphere,
             standardized: false,
             standard_warp: false,
+            latent_table: false,
             name: ModelName::EMPTY,
         }
     }
@@ -414,6 +420,17 @@ impl ModelDef {
     /// Number of weights and biases, in the order the blob stores them (base net first).
     #[must_use]
     pub const fn param_count(&self) -> usize {
-        self.net_param_count(Net::Base) + self.net_param_count(Net::Velocity)
+        self.net_param_count(Net::Base) + self.net_param_count(Net::Velocity) + self.table_len()
+    }
+
+    /// Node values of the latent table the blob stores after the nets' weights:
+    /// [`crate::base::table::TABLE_LEN`] with [`ModelDef::latent_table`], else 0.
+    #[must_use]
+    pub const fn table_len(&self) -> usize {
+        if self.latent_table {
+            crate::base::table::TABLE_LEN
+        } else {
+            0
+        }
     }
 }

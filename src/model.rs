@@ -1,5 +1,6 @@
 //! A loaded model: its definition and its two nets, sized at compile time.
 
+use crate::base::table::LatentTable;
 use crate::blob::{write_blob_with, Blob, BlobError};
 use crate::def::{encoding_len, ModelDef, Precision};
 use crate::net::{BaseNet, VelocityNet};
@@ -23,6 +24,8 @@ pub struct Model<
     pub(crate) def: ModelDef,
     pub(crate) base: BaseNet<BE, BW, BM>,
     pub(crate) velocity: VelocityNet<VE, VW, VM>,
+    /// The latent table ([`ModelDef::latent_table`]); the uniform density without one.
+    pub(crate) table: LatentTable,
 }
 
 /// Base 1x16 (3 frequencies), velocity 3x32 (5 frequencies): the paper's disk model.
@@ -54,6 +57,7 @@ impl<
             && BE <= VE
             && !(def.standardized && def.domain.is_spherical())
             && (def.standardized || !def.standard_warp)
+            && (def.standardized || !def.latent_table)
     }
 
     /// Loads and validates a blob.
@@ -77,6 +81,7 @@ impl<
         // `from_blob`.
         self.base = BaseNet::ZERO;
         self.velocity = VelocityNet::ZERO;
+        self.table = LatentTable::UNIFORM;
         let mut weights = blob.weights();
         self.visit_params_mut(|p| *p = weights.next().unwrap_or(0.0));
         Ok(())
@@ -91,6 +96,7 @@ impl<
             def,
             base: BaseNet::ZERO,
             velocity: VelocityNet::ZERO,
+            table: LatentTable::UNIFORM,
         })
     }
 
@@ -110,9 +116,8 @@ impl<
                 from_shape,
             });
         }
-        if let Some(index) = params.iter().position(|w| !w.is_finite()) {
-            return Err(BlobError::NonFiniteWeight { index });
-        }
+        let first_table = from_shape - self.def.table_len();
+        crate::blob::check_params(params.iter().copied(), first_table)?;
         let mut it = params.iter();
         self.visit_params_mut(|p| *p = it.next().copied().unwrap_or(0.0));
         Ok(())
@@ -160,6 +165,9 @@ impl<
         let features = self.def.domain.feature_count();
         self.base.visit(&mut f);
         self.velocity.visit(features, &mut f);
+        if self.def.latent_table {
+            self.table.visit(&mut f);
+        }
     }
 
     /// Visits every parameter in blob order (`docs/blob-format.md`).
@@ -167,5 +175,9 @@ impl<
         let features = self.def.domain.feature_count();
         self.base.visit_mut(&mut f);
         self.velocity.visit_mut(features, &mut f);
+        if self.def.latent_table {
+            self.table.visit_mut(&mut f);
+        }
+        self.table.prepare();
     }
 }

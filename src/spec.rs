@@ -123,6 +123,41 @@ pub const GAUSSIAN_TAIL_MIN: f32 = 9.094_947e-13;
 /// "A compressive warp of the standard coordinates").
 pub const STANDARD_WARP_K: f32 = 3.0;
 
+/// The standard normal CDF `Phi(z) = erfc(-z / sqrt 2) / 2` (docs/math.md, (73)), by the
+/// Chebyshev fit of `erfc` in Press et al., "Numerical Recipes" (2nd ed., §6.2, `erfcc`):
+/// `erfc(x) = t exp(-x^2 + P(t))`, `t = 1 / (1 + x/2)`, `x >= 0`, fractional error below
+/// 1.2e-7. `P`'s coefficients, highest degree first.
+pub const ERFC_POLY: [f32; 10] = [
+    0.170_872_77,
+    -0.822_152_23,
+    1.488_515_9,
+    -1.135_204,
+    0.278_868_07,
+    -0.186_288_06,
+    0.096_784_18,
+    0.374_091_96,
+    1.000_023_7,
+    -1.265_512_2,
+];
+
+// ---------------------------------------------------------------------------------------
+// The latent table (docs/math.md, §6.5; `ModelDef::latent_table`)
+// ---------------------------------------------------------------------------------------
+
+/// Cells per side of the latent table's grid on `[0, 1]^2`; its bilinear density has
+/// `(LATENT_TABLE_CELLS + 1)^2` nodes per slice.
+pub const LATENT_TABLE_CELLS: usize = 16;
+
+/// Incidence slices of the latent table, at `s = 1 - sqrt(wi.z)` evenly spaced on `[0, 1]`
+/// (dense towards grazing incidence, where the target changes fastest); a `wi` between two
+/// slices mixes their densities linearly.
+pub const LATENT_TABLE_SLICES: usize = 32;
+
+/// Largest node value a latent table may hold (a blob or parameter vector with a value
+/// outside `(0, LATENT_TABLE_VALUE_MAX]` is refused): the sums over a slice stay far from
+/// overflow and every cell's density positive.
+pub const LATENT_TABLE_VALUE_MAX: f32 = 1e6;
+
 /// `ln(1/sqrt(2 pi))`, the normal log-density's constant.
 pub const LN_INV_SQRT_2PI: f32 = -0.918_938_5;
 

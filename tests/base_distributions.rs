@@ -43,6 +43,35 @@ fn gaussian_quantile_is_accurate_from_the_tails_to_the_centre() {
     assert!(deep_worst < 0.1, "deep-tail relative error {deep_worst}");
 }
 
+/// The CDF the latent table reads a start point back with (docs/math.md, (75)): within
+/// 3e-7 of the tail probability (relative) from `|z| = 0` to 7, increasing, and the inverse
+/// of the quantile to 1e-5 of the tail probability wherever the quantile is accurate.
+#[test]
+fn normal_cdf_is_accurate_monotone_and_inverts_the_quantile() {
+    let mut last = 0.0f32;
+    for k in -7000..=7000 {
+        let z = k as f32 * 1e-3;
+        let p = gaussian::cdf(z);
+        let want = normal_cdf(f64::from(z));
+        let tail = want.min(1.0 - want);
+        let err = (f64::from(p) - want).abs();
+        assert!(err <= 3e-7 * tail + 6e-8, "z {z}: {p} vs {want}");
+        assert!(p >= last, "not increasing at {z}");
+        last = p;
+    }
+    for k in 1..2000 {
+        let u = k as f32 / 2000.0;
+        let back = f64::from(gaussian::cdf(gaussian::quantile(u)));
+        let tail = f64::from(u.min(1.0 - u));
+        assert!(
+            (back - f64::from(u)).abs() <= 1e-5 * tail + 1e-7,
+            "u {u}: {back}"
+        );
+    }
+    assert_eq!(gaussian::cdf(f32::NEG_INFINITY), 0.0);
+    assert_eq!(gaussian::cdf(f32::INFINITY), 1.0);
+}
+
 #[test]
 fn gaussian_quantile_is_finite_and_monotone() {
     let mut prev = f32::NEG_INFINITY;

@@ -150,8 +150,9 @@ fn header_errors_behind_a_valid_checksum() {
     assert_eq!(steps(max), Ok(u32::from(max)));
     assert!(matches!(steps(max + 1), Err(BlobError::BadHeader(_))));
     assert!(matches!(steps(u16::MAX), Err(BlobError::BadHeader(_))));
-    // Flags: bit 0 (isotropic), bit 1 (upper hemisphere), bit 2 (standard coordinates) and
-    // bit 3 (their warp, only with bit 2) are the only ones defined.
+    // Flags: bit 0 (isotropic), bit 1 (upper hemisphere), bit 2 (standard coordinates),
+    // bit 3 (their warp, only with bit 2) and bit 4 (a latent table, only with bit 2) are
+    // the only ones defined.
     assert!(matches!(case(28, 8), BlobError::BadHeader(_)));
     assert!(matches!(case(28, 16), BlobError::BadHeader(_)));
     assert_eq!(
@@ -204,6 +205,68 @@ fn standard_coordinates_flag_round_trips_and_is_refused_on_the_sphere() {
         let back = Model3x32::from_blob(&bytes).unwrap();
         assert_eq!(back.def(), m.def());
         assert_eq!(params_of(&back), params_of(&m));
+    }
+}
+
+/// A model with a latent table (docs/math.md, §6.5): the warped half-vector model with
+/// node values from a smooth positive function.
+fn random_table_model(seed: u64) -> Model3x32 {
+    let m = random_warped_half_vector(seed, 2);
+    let mut params = params_of(&m);
+    let def = diffbsdf::ModelDef {
+        latent_table: true,
+        ..*m.def()
+    };
+    for i in 0..def.table_len() {
+        params.push(0.1 + 0.05 * (i % 37) as f32);
+    }
+    Model3x32::from_params(def, &params).unwrap()
+}
+
+/// The latent table's flag (bit 4) and node values survive a write / read round trip in
+/// both precisions; without standard coordinates the flag is a header error, and a node
+/// value that is not positive, or above `LATENT_TABLE_VALUE_MAX`, a `TableValueOutOfRange`
+/// at its index, from a blob as from a parameter vector.
+#[test]
+fn latent_table_round_trips_and_out_of_range_values_are_refused() {
+    let m = random_table_model(6);
+    let first_table = m.def().param_count() - m.def().table_len();
+    for precision in [Precision::F32, Precision::F16] {
+        let bytes = blob_of(&m, precision);
+        assert_eq!(bytes[28] & 16, 16);
+        let back = Model3x32::from_blob(&bytes).unwrap();
+        assert!(back.def().latent_table);
+        let (a, b) = (params_of(&m), params_of(&back));
+        // Node values in [0.1, 1.9]: f16 keeps them to 2^-11 relative.
+        assert!(a[first_table..]
+            .iter()
+            .zip(&b[first_table..])
+            .all(|(x, y)| (x - y).abs() <= 1e-3 * x));
+    }
+    let mut bytes = blob_of(&m, Precision::F32);
+    bytes[28] &= !12;
+    reseal(&mut bytes);
+    assert!(matches!(
+        Model3x32::from_blob(&bytes),
+        Err(BlobError::BadHeader(_))
+    ));
+    for bad in [0.0f32, -1.0, 2e6] {
+        let index = first_table + 100;
+        let mut b = blob_of(&m, Precision::F32);
+        let at = HEADER_LEN + 4 * index;
+        b[at..at + 4].copy_from_slice(&bad.to_le_bytes());
+        reseal(&mut b);
+        assert_eq!(
+            Model3x32::from_blob(&b).unwrap_err(),
+            BlobError::TableValueOutOfRange { index },
+            "value {bad}"
+        );
+        let mut p = params_of(&m);
+        p[index] = bad;
+        assert_eq!(
+            Model3x32::from_params(*m.def(), &p).unwrap_err(),
+            BlobError::TableValueOutOfRange { index }
+        );
     }
 }
 

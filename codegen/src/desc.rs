@@ -49,7 +49,7 @@ impl ModelDesc {
         let mut at = 0;
         let base = layers(&def, Net::Base, &mut at);
         let velocity = layers(&def, Net::Velocity, &mut at);
-        if at != def.param_count() || params.len() != def.param_count() {
+        if at + def.table_len() != def.param_count() || params.len() != def.param_count() {
             return Err(Error::Internal("layer offsets do not cover the parameters"));
         }
         Ok(ModelDesc {
@@ -96,10 +96,19 @@ pub(crate) mod tests {
     use super::*;
     use diffbsdf::internals::blob::{blob_len, write_blob};
 
-    /// A valid blob for `def` with small, deterministic weights.
+    /// A valid blob for `def` with small, deterministic weights (and latent-table values
+    /// in [0.25, 0.75]).
     pub(crate) fn blob(def: &ModelDef) -> Vec<u8> {
+        let first_table = def.param_count() - def.table_len();
         let params: Vec<f32> = (0..def.param_count())
-            .map(|i| 0.25 * (i as f32 * 0.618).sin())
+            .map(|i| {
+                let w = 0.25 * (i as f32 * 0.618).sin();
+                if i >= first_table {
+                    0.5 + w
+                } else {
+                    w
+                }
+            })
             .collect();
         let mut out = vec![0; blob_len(def)];
         write_blob(def, &params, &mut out).expect("write blob");

@@ -59,6 +59,7 @@ fn architecture(d: &ModelDef) -> impl PartialEq {
         d.accepts_incident_z(-1.0),
         d.standardized,
         d.standard_warp,
+        d.latent_table,
     )
 }
 

@@ -1,5 +1,5 @@
-//! Golden files: the output for three small fixed random-weight models (disk, sphere and
-//! half-vector chart) in
+//! Golden files: the output for four small fixed random-weight models (disk, sphere,
+//! half-vector chart, and that with a latent table) in
 //! every language and in the main option combinations is committed under
 //! `tests/golden/` and must not change unnoticed. Regenerate with
 //! `DIFFBSDF_BLESS=1 cargo test -p diffbsdf-codegen --test golden` and review the diff.
@@ -15,6 +15,12 @@ use support::vectors::random_blob;
 /// The disk one is isotropic, so the incident-frame rotation is in the goldens too; the
 /// half-vector one runs its flow in standard coordinates (docs/math.md, §6.3).
 fn tiny(domain: Domain, name: &str) -> Vec<u8> {
+    tiny_with_table(domain, name, false)
+}
+
+/// [`tiny`], with a latent table in front of the half-vector flow when `table` (its node
+/// values in the parameter buffer: the golden files use buffer mode for it).
+fn tiny_with_table(domain: Domain, name: &str, table: bool) -> Vec<u8> {
     let def = ModelDef {
         domain,
         precision: Precision::F32,
@@ -39,6 +45,7 @@ fn tiny(domain: Domain, name: &str) -> Vec<u8> {
         // As `fit` makes it by default: the half-vector flow in warped standard coordinates.
         standardized: domain == Domain::HalfVector,
         standard_warp: domain == Domain::HalfVector,
+        latent_table: table,
         name: ModelName::new(name).expect("name"),
     };
     random_blob(&def, 5, 1.0)
@@ -48,6 +55,7 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
     let disk = tiny(Domain::Disk, "tiny disk");
     let sphere = tiny(Domain::Sphere, "tiny-sphere");
     let half_vector = tiny(Domain::HalfVector, "tiny half vector");
+    let table = tiny_with_table(Domain::HalfVector, "tiny half vector table", true);
     let opt = |language, float, weights, entry_points| Options {
         language,
         float,
@@ -124,6 +132,12 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
             "half_vector_all_fused.glsl",
             half_vector.clone(),
             fused(opt(Language::Glsl, Float::F32, buf, EntryPoints::ALL)),
+        ),
+        // the latent table (docs/math.md, section 6.5), its nodes in the buffer
+        (
+            "half_vector_table_buffer.wgsl",
+            table,
+            opt(Language::Wgsl, Float::F32, buf, EntryPoints::ALL),
         ),
         (
             "half_vector_all_f16_fused.wgsl",

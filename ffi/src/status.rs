@@ -47,6 +47,8 @@ pub enum diffbsdf_status {
     DIFFBSDF_ERR_SHAPE_MISMATCH = -21,
     /// An output buffer is too small.
     DIFFBSDF_ERR_BUFFER_TOO_SMALL = -22,
+    /// Blob: a latent-table value is not positive or too large.
+    DIFFBSDF_ERR_TABLE_VALUE = -23,
 }
 
 use diffbsdf_status as S;
@@ -68,6 +70,7 @@ impl From<BlobError> for diffbsdf_status {
             BlobError::NonFiniteWeight { .. } => S::DIFFBSDF_ERR_NON_FINITE_WEIGHT,
             BlobError::ShapeMismatch => S::DIFFBSDF_ERR_SHAPE_MISMATCH,
             BlobError::BufferTooSmall { .. } => S::DIFFBSDF_ERR_BUFFER_TOO_SMALL,
+            BlobError::TableValueOutOfRange { .. } => S::DIFFBSDF_ERR_TABLE_VALUE,
         }
     }
 }
@@ -97,11 +100,12 @@ impl diffbsdf_status {
                 b"blob architecture is not one this library is compiled for\0"
             }
             S::DIFFBSDF_ERR_BUFFER_TOO_SMALL => b"output buffer too small\0",
+            S::DIFFBSDF_ERR_TABLE_VALUE => b"a latent-table value in the blob is out of range\0",
         }
     }
 
     /// Every status, for tests and for `diffbsdf_status_message` of unknown values.
-    pub const ALL: [diffbsdf_status; 19] = [
+    pub const ALL: [diffbsdf_status; 20] = [
         S::DIFFBSDF_OK,
         S::DIFFBSDF_NO_SAMPLE,
         S::DIFFBSDF_ERR_NULL,
@@ -121,5 +125,6 @@ impl diffbsdf_status {
         S::DIFFBSDF_ERR_NON_FINITE_WEIGHT,
         S::DIFFBSDF_ERR_SHAPE_MISMATCH,
         S::DIFFBSDF_ERR_BUFFER_TOO_SMALL,
+        S::DIFFBSDF_ERR_TABLE_VALUE,
     ];
 }

@@ -98,6 +98,8 @@ fn param_count_and_buffer_statuses_map() {
     assert_eq!(diffbsdf_status::from(pc), DIFFBSDF_ERR_PARAM_COUNT);
     let bt = BlobError::BufferTooSmall { needed: 2, got: 1 };
     assert_eq!(diffbsdf_status::from(bt), DIFFBSDF_ERR_BUFFER_TOO_SMALL);
+    let tv = BlobError::TableValueOutOfRange { index: 3 };
+    assert_eq!(diffbsdf_status::from(tv), DIFFBSDF_ERR_TABLE_VALUE);
     for s in diffbsdf_status::ALL {
         let msg = unsafe { std::ffi::CStr::from_ptr(diffbsdf_status_message(s as i32)) };
         assert!(!msg.to_bytes().is_empty());

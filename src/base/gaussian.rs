@@ -1,9 +1,9 @@
 //! The standard normal: its quantile (the map from `u` to `z`) and its log-density.
 
-use crate::math::{ln, sqrt};
+use crate::math::{exp, ln, sqrt};
 use crate::spec::{
-    ERFINV_BRANCH_W, ERFINV_CENTRAL, ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT,
-    GAUSSIAN_TAIL_MIN, LN_INV_SQRT_2PI,
+    ERFC_POLY, ERFINV_BRANCH_W, ERFINV_CENTRAL, ERFINV_CENTRAL_SHIFT, ERFINV_TAIL,
+    ERFINV_TAIL_SHIFT, GAUSSIAN_TAIL_MIN, LN_INV_SQRT_2PI,
 };
 
 /// `z = Phi^-1(u) = sqrt(2) erfinv(2u - 1)`, finite for every `u` in [0, 1].
@@ -43,6 +43,22 @@ fn horner(c: &[f32], w: f32) -> f32 {
         p = ck + p * w;
     }
     p
+}
+
+/// `Phi(z) = erfc(-z / sqrt 2) / 2`, for `z <= 0` as `t exp(-x^2 + P(t)) / 2` with `x =
+/// |z| / sqrt 2`, `t = 1 / (1 + x / 2)` (docs/math.md, (73)), for `z > 0` as one minus
+/// that: the tail probability keeps its relative precision on either side.
+#[inline]
+#[must_use]
+pub fn cdf(z: f32) -> f32 {
+    let x = z.abs() * core::f32::consts::FRAC_1_SQRT_2;
+    let t = 1.0 / (1.0 + 0.5 * x);
+    let tail = 0.5 * t * exp(horner(&ERFC_POLY, t) - x * x);
+    if z > 0.0 {
+        1.0 - tail
+    } else {
+        tail
+    }
 }
 
 /// `ln N(z; 0, 1) = -z^2/2 - ln sqrt(2 pi)`.

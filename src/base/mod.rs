@@ -9,6 +9,7 @@
 
 pub mod gaussian;
 mod standard;
+pub mod table;
 pub mod warp;
 pub mod wrapped_cauchy;
 

@@ -52,6 +52,11 @@ pub enum BlobError {
         /// Position of the weight in blob order.
         index: usize,
     },
+    /// A node value of the latent table is not in `(0, spec::LATENT_TABLE_VALUE_MAX]`.
+    TableValueOutOfRange {
+        /// Position of the value in blob order.
+        index: usize,
+    },
     /// The blob is valid but its shape is not the one this model type was compiled for.
     ShapeMismatch,
     /// The output buffer is too small for the blob being written.
@@ -93,6 +98,11 @@ impl fmt::Display for BlobError {
                 "blob declares {declared} parameters but its shape has {from_shape}"
             ),
             BlobError::NonFiniteWeight { index } => write!(f, "weight {index} is not finite"),
+            BlobError::TableValueOutOfRange { index } => write!(
+                f,
+                "latent table value {index} is not in (0, {}]",
+                crate::spec::LATENT_TABLE_VALUE_MAX
+            ),
             BlobError::ShapeMismatch => {
                 write!(f, "blob shape differs from the compiled model shape")
             }

@@ -80,7 +80,7 @@ impl<'a> Blob<'a> {
         let def = raw.into_def(precision)?;
         let weights = &body[HEADER_LEN..];
         let blob = Blob { def, weights };
-        blob.check_finite()?;
+        blob.check_values()?;
         Ok(blob)
     }
 
@@ -95,12 +95,27 @@ impl<'a> Blob<'a> {
             })
     }
 
-    fn check_finite(&self) -> Result<(), BlobError> {
-        match self.weights().position(|w| !w.is_finite()) {
-            Some(index) => Err(BlobError::NonFiniteWeight { index }),
-            None => Ok(()),
+    fn check_values(&self) -> Result<(), BlobError> {
+        let first_table = self.def.param_count() - self.def.table_len();
+        check_params(self.weights(), first_table)
+    }
+}
+
+/// Every parameter finite, every latent-table value (from index `first_table` on) in
+/// `(0, spec::LATENT_TABLE_VALUE_MAX]`.
+pub(crate) fn check_params(
+    params: impl Iterator<Item = f32>,
+    first_table: usize,
+) -> Result<(), BlobError> {
+    for (index, w) in params.enumerate() {
+        if !w.is_finite() {
+            return Err(BlobError::NonFiniteWeight { index });
+        }
+        if index >= first_table && !(w > 0.0 && w <= crate::spec::LATENT_TABLE_VALUE_MAX) {
+            return Err(BlobError::TableValueOutOfRange { index });
         }
     }
+    Ok(())
 }
 
 /// The header fields after magic and version, as stored (offsets in `docs/blob-format.md`).
@@ -148,7 +163,11 @@ impl RawHeader {
         let domain = Domain::from_code(self.domain).ok_or(BlobError::UnknownDomain(self.domain))?;
         let activation = Activation::from_code(self.activation)
             .ok_or(BlobError::UnknownActivation(self.activation))?;
-        let known = FLAG_ISOTROPIC | FLAG_UPPER_HEMISPHERE | FLAG_STANDARDIZED | FLAG_STANDARD_WARP;
+        let known = FLAG_ISOTROPIC
+            | FLAG_UPPER_HEMISPHERE
+            | FLAG_STANDARDIZED
+            | FLAG_STANDARD_WARP
+            | FLAG_LATENT_TABLE;
         if self.flags & !known != 0 {
             return Err(BlobError::BadHeader("unknown flag bits are set"));
         }
@@ -162,6 +181,12 @@ impl RawHeader {
         if standard_warp && !standardized {
             return Err(BlobError::BadHeader(
                 "warped standard coordinates without standard coordinates",
+            ));
+        }
+        let latent_table = self.flags & FLAG_LATENT_TABLE != 0;
+        if latent_table && !standardized {
+            return Err(BlobError::BadHeader(
+                "a latent table without standard coordinates",
             ));
         }
         check_shape(self.base, "base net")?;
@@ -198,6 +223,7 @@ impl RawHeader {
             },
             standardized,
             standard_warp,
+            latent_table,
             name,
         };
         let from_shape = def.param_count();
@@ -220,6 +246,9 @@ pub(crate) const FLAG_STANDARDIZED: u32 = 4;
 /// Header flag: the flow runs in the compressed standard coordinates
 /// ([`ModelDef::standard_warp`]; only with [`FLAG_STANDARDIZED`]).
 pub(crate) const FLAG_STANDARD_WARP: u32 = 8;
+/// Header flag: the blob stores a latent table after the nets' weights
+/// ([`ModelDef::latent_table`]; only with [`FLAG_STANDARDIZED`]).
+pub(crate) const FLAG_LATENT_TABLE: u32 = 16;
 /// Header flag: the model is defined for `wi` above the surface only
 /// ([`IncidentRange::UpperHemisphere`]); implied on the disk, written there too.
 pub(crate) const FLAG_UPPER_HEMISPHERE: u32 = 2;

@@ -1,8 +1,8 @@
 //! Writes a blob into a caller's buffer (no allocation, so it works in `no_std` too).
 
 use super::{
-    crc32, BlobError, CHECKSUM_LEN, FLAG_ISOTROPIC, FLAG_STANDARDIZED, FLAG_STANDARD_WARP,
-    FLAG_UPPER_HEMISPHERE, HEADER_LEN, MAGIC, VERSION,
+    crc32, BlobError, CHECKSUM_LEN, FLAG_ISOTROPIC, FLAG_LATENT_TABLE, FLAG_STANDARDIZED,
+    FLAG_STANDARD_WARP, FLAG_UPPER_HEMISPHERE, HEADER_LEN, MAGIC, VERSION,
 };
 use crate::def::IncidentRange;
 use crate::def::{ModelDef, NetShape, Precision, NAME_CAPACITY};
@@ -120,6 +120,9 @@ fn write_header(def: &ModelDef, h: &mut [u8]) {
     }
     if def.standard_warp {
         flags |= FLAG_STANDARD_WARP;
+    }
+    if def.latent_table {
+        flags |= FLAG_LATENT_TABLE;
     }
     h[28..32].copy_from_slice(&flags.to_le_bytes());
     h[32..32 + def.name.as_bytes().len()].copy_from_slice(def.name.as_bytes());

@@ -8,7 +8,8 @@ mod forward;
 mod inverse;
 mod returned;
 
-use crate::base::{warp, BaseDist};
+use crate::base::table::TableSlice;
+use crate::base::{gaussian, warp, BaseDist};
 use crate::model::Model;
 use crate::net::encoding::{encode_wi, prefix};
 use glam::Vec3;
@@ -19,6 +20,8 @@ use glam::Vec3;
 pub(crate) struct Conditioned<const VW: usize> {
     pub cond: [f32; VW],
     pub base: BaseDist,
+    /// The latent table's slices for this `wi` (unused without a table).
+    pub slice: TableSlice,
 }
 
 /// `det(I + h J)` for a 2x2 Jacobian: `(1 + h J00)(1 + h J11) - h^2 J01 J10`.
@@ -51,6 +54,7 @@ impl<
         Conditioned {
             cond: self.velocity.condition(&enc),
             base,
+            slice: TableSlice::of(wi.z),
         }
     }
 
@@ -58,7 +62,10 @@ impl<
     /// coordinates, or its compression (63) in warped ones.
     #[inline(always)]
     pub(crate) fn flow_start(&self, c: &Conditioned<VW>, u: [f32; 2]) -> [f32; 2] {
-        if self.def.standardized {
+        if self.def.latent_table {
+            // u drawn through the latent table first (docs/math.md, (76)).
+            BaseDist::standard_start(self.table.warp(c.slice, u), self.def.standard_warp)
+        } else if self.def.standardized {
             BaseDist::standard_start(u, self.def.standard_warp)
         } else {
             c.base.sample(u)
@@ -72,9 +79,22 @@ impl<
         if !self.def.standardized {
             c.base.ln_pdf(p0)
         } else if self.def.standard_warp {
-            c.base.standard_ln_pdf(warp::expand2(p0)) + warp::ln_expansion2(p0)
+            let z0 = warp::expand2(p0);
+            c.base.standard_ln_pdf(z0) + warp::ln_expansion2(p0) + self.table_ln_density(c, z0)
         } else {
-            c.base.standard_ln_pdf(p0)
+            c.base.standard_ln_pdf(p0) + self.table_ln_density(c, p0)
+        }
+    }
+
+    /// `ln` of the latent table's density at `(Phi(z0_0), Phi(z0_1))`, the point of `[0,
+    /// 1]^2` the standard start `z0` was drawn from (docs/math.md, (77)); 0 without a table.
+    #[inline(always)]
+    fn table_ln_density(&self, c: &Conditioned<VW>, z0: [f32; 2]) -> f32 {
+        if self.def.latent_table {
+            let x = [gaussian::cdf(z0[0]), gaussian::cdf(z0[1])];
+            self.table.ln_density(c.slice, x)
+        } else {
+            0.0
         }
     }
 

@@ -29,6 +29,7 @@ pub mod export;
 pub mod features;
 pub mod flow_fit;
 mod lanes;
+pub mod latent_table;
 pub mod metrics;
 pub mod mlp;
 pub mod pipeline;

@@ -8,6 +8,7 @@ use crate::dataset::{MaterialPairs, TrainingData, TrainingSet};
 use crate::error::TrainError;
 use crate::export::model_from_nets;
 use crate::flow_fit::{train_flow, Coupling, FlowConfig};
+use crate::latent_table::{with_latent_table, TableConfig};
 use crate::mlp::Mlp;
 use crate::progress::Progress;
 use crate::refine::{refine, RefineConfig};
@@ -67,6 +68,10 @@ pub struct FitConfig {
     /// Variance refinement of the distilled student against the material (flat charts;
     /// [`crate::refine`], docs/math.md §11); `iters = 0` skips it.
     pub refine: RefineConfig,
+    /// The latent table fitted last, in front of the final flow (models in standard
+    /// coordinates only; [`crate::latent_table`], docs/math.md §6.5); `draws_per_slice =
+    /// 0` skips it.
+    pub table: TableConfig,
 }
 
 impl FitConfig {
@@ -87,7 +92,10 @@ impl FitConfig {
     ///
     /// The distilled student is then refined to lower its relative variance against the
     /// material directly ([`RefineConfig::default`], docs/math.md §11; measured in
-    /// docs/measured-materials.md, "Variance refinement").
+    /// docs/measured-materials.md, "Variance refinement"), and a latent table is fitted in
+    /// front of the refined flow where it runs in standard coordinates
+    /// ([`TableConfig::DEFAULT`], docs/math.md §6.5; docs/measured-materials.md, "The
+    /// latent table").
     pub fn standard(domain: Domain, seed: u64) -> Self {
         let mut def = paper_def(domain);
         def.standardized = domain == Domain::HalfVector;
@@ -102,6 +110,9 @@ impl FitConfig {
         c.teacher_net.width = STANDARD_TEACHER_WIDTH;
         c.teacher.iters = STANDARD_TEACHER_ITERS;
         c.refine = RefineConfig::default();
+        if def.standardized {
+            c.table = TableConfig::DEFAULT;
+        }
         c
     }
 
@@ -149,6 +160,7 @@ impl FitConfig {
             use_isotropy: true,
             angle_fraction: 0.5,
             refine: RefineConfig::OFF,
+            table: TableConfig::OFF,
         }
     }
 
@@ -318,6 +330,17 @@ pub fn fit_material(
             seconds: t.elapsed().as_secs_f64(),
             loss_start: what.loss_before,
             loss_end: what.loss_after,
+        });
+        fitted.seconds += t.elapsed().as_secs_f64();
+    }
+    if cfg.table.draws_per_slice > 0 && fitted.model.def().standardized {
+        let t = Instant::now();
+        fitted.model = with_latent_table(&fitted.model, material, &cfg.table, cfg.seed)?;
+        fitted.stages.push(StageReport {
+            stage: "table",
+            seconds: t.elapsed().as_secs_f64(),
+            loss_start: 0.0,
+            loss_end: 0.0,
         });
         fitted.seconds += t.elapsed().as_secs_f64();
     }

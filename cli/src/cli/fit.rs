@@ -171,6 +171,12 @@ pub struct FitArgs {
     /// with the standard recipe, 0 with --quick and --tiny.
     #[arg(long)]
     pub refine_iters: Option<usize>,
+    /// Draws per incidence slice of the latent table fitted last, in front of the final
+    /// flow (docs/math.md section 6.5): 0 skips it (the fits before 2026-12-06). Default:
+    /// 300 000 with the standard recipe in standard coordinates (the half-vector chart),
+    /// 0 otherwise.
+    #[arg(long)]
+    pub table_draws: Option<usize>,
     /// Peak learning rate of the variance refinement (cosine decay to 5 %). Default
     /// 8e-4 (docs/measured-materials.md, "Twice the peak rate again"; 4e-4 until
     /// 2026-12-06, 2e-4 before 2026-12-05).
@@ -419,6 +425,9 @@ pub fn config(args: &FitArgs, domain: Domain) -> FitConfig {
     }
     if let Some(n) = args.refine_iters {
         c.refine.iters = n;
+    }
+    if let Some(n) = args.table_draws {
+        c.table.draws_per_slice = n;
     }
     if let Some(lr) = args.refine_lr {
         c.refine.lr = lr;

@@ -12,6 +12,7 @@ pub mod fit;
 pub mod material;
 pub mod refine;
 pub mod share;
+pub mod table;
 pub mod tradeoff;
 
 use clap::{Parser, Subcommand};
@@ -43,6 +44,8 @@ pub enum Command {
     Eval(eval::EvalArgs),
     /// Refine a fitted blob's student to lower its variance against its material.
     Refine(refine::RefineArgs),
+    /// Fit a latent table to a fitted blob's flow against its material.
+    Table(table::TableArgs),
     /// The main job: the embedded default model, its quality and cost, written to a folder.
     Demo(demo::DemoArgs),
     /// GLSL, WGSL or a standalone C header from a blob.
@@ -89,6 +92,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), CliError> {
         Command::Fit(a) => fit::run(*a, out).map_err(CliError::Train),
         Command::Eval(a) => eval::run(a, out).map_err(CliError::Train),
         Command::Refine(a) => refine::run(a, out).map_err(CliError::Train),
+        Command::Table(a) => table::run(a, out).map_err(CliError::Train),
         Command::Demo(a) => demo::run(a, out).map_err(CliError::Train),
         Command::Codegen(a) => codegen::run(&a, out).map_err(CliError::Codegen),
         Command::Tradeoff(a) => tradeoff::run(a, out).map_err(CliError::Train),

@@ -115,16 +115,25 @@ impl Emitter<'_> {
             self.code
                 .line("// x0 for u: the deterministic map of the base distribution.");
         }
-        // In standard coordinates z0 does not depend on wi: no `cond`.
-        let ps = if self.standardized() {
+        // In standard coordinates z0 does not depend on wi (no `cond`), unless `u` is
+        // drawn through the latent table first.
+        let ps = if self.standardized() && !self.table() {
             vec![(T::F, "u0"), (T::F, "u1")]
         } else {
             vec![(cond_t, "cond"), (T::F, "u0"), (T::F, "u1")]
         };
-        self.fn_open(vec_t.clone(), "base_sample", false, &ps);
+        self.fn_open(vec_t.clone(), "base_sample", self.table(), &ps);
         let r = self.d.decl(&vec_t, "r", None);
         self.code.line(r);
-        let q0 = self.call("quantile", false, &["u0"]);
+        let (u0, u1) = if self.table() {
+            // u through the latent table (docs/math.md, (76)).
+            let tu = self.call("table_warp", true, &["cond", "u0", "u1"]);
+            self.decl(vec_t.clone(), "tu", &tu);
+            ("tu.x", "tu.y")
+        } else {
+            ("u0", "u1")
+        };
+        let q0 = self.call("quantile", false, &[u0]);
         if self.sphere() {
             let e1 = self.math(Math::Exp, "cond.p1");
             self.code.line(format!("r.x = cond.p0 + {e1} * {q0};"));
@@ -133,7 +142,7 @@ impl Emitter<'_> {
             self.code.line(format!("r.y = cond.p2 + {wc};"));
         } else if self.standardized() {
             // docs/math.md, (59); (63) in warped coordinates.
-            let q1 = self.call("quantile", false, &["u1"]);
+            let q1 = self.call("quantile", false, &[u1]);
             if self.warped() {
                 let (w0, w1) = (
                     self.call("warp_compress", false, &[&q0]),
@@ -158,7 +167,9 @@ impl Emitter<'_> {
 
     /// The arguments of a `base_sample` call.
     pub(super) fn base_sample_call(&self) -> String {
-        if self.standardized() {
+        if self.table() {
+            self.call("base_sample", true, &["cond", "u0", "u1"])
+        } else if self.standardized() {
             self.call("base_sample", false, &["u0", "u1"])
         } else {
             self.call("base_sample", false, &["cond", "u0", "u1"])
@@ -215,7 +226,7 @@ impl Emitter<'_> {
         let cond_t = self.st("Cond");
         self.code.line("// ln p0(x0) in flow coordinates.");
         let ps = [(cond_t, "cond"), (T::F, "x0"), (T::F, "x1")];
-        self.fn_open(T::F, "base_ln_pdf", false, &ps);
+        self.fn_open(T::F, "base_ln_pdf", self.table(), &ps);
         let c = self.f(LN_INV_SQRT_2PI);
         let mh = self.f(-0.5);
         if self.sphere() {
@@ -246,8 +257,21 @@ impl Emitter<'_> {
             } else {
                 String::new()
             };
+            // Plus ln of the latent table's density at Phi(z0) (docs/math.md, (77)).
+            let table = if self.table() {
+                let (p0, p1) = (
+                    self.call("normal_cdf", false, &["z0"]),
+                    self.call("normal_cdf", false, &["z1"]),
+                );
+                format!(
+                    " + {}",
+                    self.call("table_ln_density", true, &["cond", &p0, &p1])
+                )
+            } else {
+                String::new()
+            };
             self.code.line(format!(
-                "return ({mh} * z0 * z0 + {c}) + ({mh} * z1 * z1 + {c}) - cond.p2 - cond.p3{warp};"
+                "return ({mh} * z0 * z0 + {c}) + ({mh} * z1 * z1 + {c}) - cond.p2 - cond.p3{warp}{table};"
             ));
         }
         self.end_fn();

@@ -280,7 +280,7 @@ impl Emitter<'_> {
             let end = self.warp_ln_expansion_sum("q.fa", "q.fb");
             self.code.line(format!("ln_det = ln_det + {end};"));
         }
-        let lp = self.call("base_ln_pdf", false, &["cond", "sa", "sb"]);
+        let lp = self.call("base_ln_pdf", self.table(), &["cond", "sa", "sb"]);
         if self.half_vector() {
             self.half_vector_sum("q.lx", "q.ly", "q.lz");
         }

@@ -375,7 +375,7 @@ impl Emitter<'_> {
             let end = self.warp_ln_expansion_sum(fa, fb);
             self.code.line(format!("ln_det = ln_det + {end};"));
         }
-        let lp = self.call("base_ln_pdf", false, &["cond", "a", "b"]);
+        let lp = self.call("base_ln_pdf", self.table(), &["cond", "a", "b"]);
         let lm = self.ln_measure("wo.z", "ya");
         self.decl(
             T::F,

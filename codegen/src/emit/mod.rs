@@ -8,6 +8,7 @@
 //! | `net.rs`     | `src/net/`: SiLU, `wi` encoding, the two MLPs, `dv/dx`   |
 //! | `base.rs`    | `src/base/`: Gaussian quantile, wrapped Cauchy, `p0`     |
 //! | `warp.rs`    | `src/base/warp.rs`: the warp of the standard coordinates |
+//! | `table.rs`   | `src/base/table.rs`, `gaussian::cdf`: the latent table   |
 //! | `domain.rs`  | `src/domain/`: wrap, features, advance, directions       |
 //! | `frame.rs`   | `src/frame.rs`: the incident frame of isotropic models   |
 //! | `input.rs`   | `src/input.rs`: input checks, the entry points' prologue |
@@ -26,6 +27,7 @@ mod frame;
 mod input;
 mod inverse;
 mod net;
+mod table;
 #[cfg(test)]
 mod tests;
 mod warp;
@@ -192,6 +194,19 @@ impl<'a> Emitter<'a> {
         if self.warped() && self.needs_ln_pdf() {
             self.warp_ln_expansion();
         }
+        // src/base/table.rs: the latent table's nodes, its map (sample) and its density
+        // (every density, at Phi of the standard start point).
+        if self.table() {
+            self.table_node();
+        }
+        if self.table() && self.needs_base_sample() {
+            self.table_fraction();
+            self.table_warp();
+        }
+        if self.table() && self.needs_ln_pdf() {
+            self.normal_cdf();
+            self.table_ln_density();
+        }
         if self.needs_base_sample() {
             self.base_sample();
         }
@@ -241,6 +256,10 @@ impl<'a> Emitter<'a> {
         let params: Vec<String> = (0..BASE_OUTPUTS).map(|k| format!("p{k}")).collect();
         let mut cond = vec![(T::Arr(Box::new(T::N), vw), "c")];
         cond.extend(params.iter().map(|p| (T::F, p.as_str())));
+        if self.table() {
+            // The latent table's first slice for wi and the next one's weight.
+            cond.extend([(T::U, "tk"), (T::F, "tt")]);
+        }
         lines.extend(self.d.struct_decl(&self.p("Cond"), &cond));
         lines.push("// A flow point or a velocity.".into());
         lines.extend(

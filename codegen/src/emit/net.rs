@@ -158,6 +158,9 @@ impl Emitter<'_> {
             };
             self.code.line(format!("r.p{k} = {v};"));
         }
+        if self.table() {
+            self.table_slices();
+        }
         let v0 = m.velocity[0];
         let skip = m.features() + 1;
         self.code.line(format!(

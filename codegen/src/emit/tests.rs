@@ -4,12 +4,15 @@
 
 use crate::desc::tests::blob;
 use crate::{generate, Float, Language, Options};
+use diffbsdf::internals::base::table::{NODES, SLICE_LEN};
+use diffbsdf::spec::ERFC_POLY;
 use diffbsdf::spec::{
     BASE_OUTPUTS, DET_REUSE_TOL, DET_SECANT_TOL, ENCODING_PER_FREQ, ENCODING_RAW, ERFINV_BRANCH_W,
     ERFINV_CENTRAL, ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT, EXP_ARG_LIMIT_F16,
-    EXP_ARG_MAX, EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI,
-    LN_SCALE_MAX, LN_SCALE_MIN, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO,
-    STANDARD_WARP_K, UNIT_TOLERANCE, VELOCITY_OUTPUTS,
+    EXP_ARG_MAX, EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LATENT_TABLE_CELLS, LATENT_TABLE_SLICES,
+    LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI, LN_SCALE_MAX, LN_SCALE_MIN, NEWTON_MAX_ITERS,
+    NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO, STANDARD_WARP_K, UNIT_TOLERANCE,
+    VELOCITY_OUTPUTS,
 };
 use diffbsdf::{Domain, ModelDef};
 
@@ -21,8 +24,8 @@ struct Output {
     code: String,
 }
 
-/// Every language and precision, for an isotropic disk model, a sphere model and a
-/// half-vector model in warped standard coordinates.
+/// Every language and precision, for an isotropic disk model, a sphere model, a
+/// half-vector model in warped standard coordinates and the same with a latent table.
 fn outputs() -> Vec<Output> {
     let mut disk = ModelDef::paper_disk();
     disk.isotropic = true;
@@ -32,8 +35,10 @@ fn outputs() -> Vec<Output> {
     warped.domain = Domain::HalfVector;
     warped.standardized = true;
     warped.standard_warp = true;
+    let mut table = warped;
+    table.latent_table = true;
     let mut out = Vec::new();
-    for def in [disk, sphere, warped] {
+    for def in [disk, sphere, warped, table] {
         let bytes = blob(&def);
         for language in [Language::Glsl, Language::Wgsl, Language::C] {
             for float in [Float::F32, Float::F16] {
@@ -44,7 +49,11 @@ fn outputs() -> Vec<Output> {
                 options.float = float;
                 let code = generate(&bytes, &options).expect("generate");
                 out.push(Output {
-                    label: format!("{:?} {language:?} {float:?}", def.domain),
+                    label: format!(
+                        "{:?}{} {language:?} {float:?}",
+                        def.domain,
+                        if def.latent_table { " table" } else { "" }
+                    ),
                     def,
                     half: float == Float::F16,
                     code,
@@ -188,7 +197,8 @@ fn warp_scale_is_the_kernels() {
         .into_iter()
         .filter(|o| o.def.standard_warp)
         .collect();
-    assert_eq!(warped.len(), 5);
+    // The warped model and the one with a latent table, in five outputs each.
+    assert_eq!(warped.len(), 10);
     for o in warped {
         // The first line of each is `a = |z| / K`, `s = y / K` or `a = |y| / K`.
         for name in ["warp_compress", "warp_expand", "warp_ln_expansion"] {
@@ -263,4 +273,51 @@ fn newton_constants_are_the_kernels() {
             o.label
         );
     }
+}
+
+#[test]
+fn latent_table_layout_and_cdf_are_the_kernels() {
+    let mut seen = 0;
+    for o in outputs().iter().filter(|o| o.def.latent_table) {
+        seen += 1;
+        let b = body(o, "normal_cdf");
+        let coeffs: Vec<f32> = b
+            .iter()
+            .filter(|l| l.starts_with("p = "))
+            .map(|l| lits(l)[0])
+            .collect();
+        assert_eq!(coeffs, ERFC_POLY, "{}: erfc coefficients", o.label);
+        let b = body(o, "table_node");
+        let at = b.iter().copied().find(|l| l.contains("cond.tk *"));
+        let at = at.unwrap_or_else(|| panic!("{}: no node offset", o.label));
+        let offset = (o.def.param_count() - o.def.table_len()) as u32;
+        assert_eq!(
+            uints(at),
+            [offset, SLICE_LEN as u32, NODES as u32],
+            "{}",
+            o.label
+        );
+        let b = body(o, "condition");
+        let slices = line(o, &b, "if (r.tk >");
+        assert_eq!(
+            uints(slices),
+            [LATENT_TABLE_SLICES as u32 - 2],
+            "{}",
+            o.label
+        );
+        let b = body(o, "table_ln_density");
+        let mut cells = 0;
+        for l in b.iter().filter(|l| l.starts_with("if (")) {
+            let want = if l.contains("==") {
+                // The trapezoid weights' ends.
+                vec![0, LATENT_TABLE_CELLS as u32]
+            } else {
+                cells += 1;
+                vec![LATENT_TABLE_CELLS as u32 - 1]
+            };
+            assert_eq!(uints(l), want, "{}: {l}", o.label);
+        }
+        assert_eq!(cells, 2, "{}: the cells of both coordinates", o.label);
+    }
+    assert_eq!(seen, 5, "the table model in every language and precision");
 }

@@ -86,6 +86,10 @@ pub fn random_params(def: &ModelDef, seed: u64, stretch: f32) -> Vec<f32> {
             }
         }
     }
+    // The latent table's node values: positive, a 60x range.
+    for _ in 0..def.table_len() {
+        p.push(rng.range(0.05, 3.0));
+    }
     assert_eq!(p.len(), def.param_count());
     p
 }
@@ -247,6 +251,23 @@ pub fn test_models() -> Vec<TestModel> {
                     Precision::F16,
                 ),
                 22,
+                1.2,
+            ),
+        },
+        // A latent table in front of the warped flow (docs/math.md, §6.5), anisotropic:
+        // the shipped table models are isotropic.
+        TestModel {
+            name: "random_half_vector_table".into(),
+            blob: random_blob(
+                &named(
+                    ModelDef {
+                        latent_table: true,
+                        ..warped(half_vector)
+                    },
+                    "random_half_vector_table",
+                    Precision::F32,
+                ),
+                24,
                 1.2,
             ),
         },

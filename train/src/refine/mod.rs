@@ -150,6 +150,9 @@ pub fn refine(
     seed: u64,
     progress: &dyn Progress,
 ) -> Result<(AnyModel, Refined), TrainError> {
+    // The flow alone: a latent table fitted to the old flow would not fit the new one.
+    let flow = crate::latent_table::without_table(model)?;
+    let model = &flow;
     let def = *model.def();
     let mut nets = Nets::of(model)?;
     let before = validation_loss(&def, &nets, material);

@@ -1,0 +1,55 @@
+//! `diffbsdf table m.dbsdf <material-spec> --out t.dbsdf`: fits a latent table to a fitted
+//! model's flow (`diffbsdf_train::latent_table`, docs/math.md §6.5), as `fit` does last;
+//! writes the f32 blob at `--out` and the f16 beside it.
+
+use super::fit::{f16_path, write_file, CommandError};
+use super::share::parse_share;
+use clap::Args;
+use diffbsdf::{AnyModel, Precision};
+use diffbsdf_materials::parse_spec;
+use diffbsdf_train::latent_table::{with_latent_table, TableConfig};
+use diffbsdf_train::ModelExt;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `diffbsdf table`.
+#[derive(Debug, Args)]
+pub struct TableArgs {
+    /// The fitted model blob (standard coordinates: the half-vector chart's default).
+    pub blob: PathBuf,
+    /// Material spec it was fitted to.
+    pub spec: String,
+    /// Output blob (f32); the f16 blob is written beside it.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Draws per incidence slice.
+    #[arg(long, default_value_t = TableConfig::DEFAULT.draws_per_slice)]
+    pub draws: usize,
+    /// Share of the uniform density in every slice.
+    #[arg(long, default_value_t = TableConfig::DEFAULT.floor as f32, value_parser = parse_share)]
+    pub floor: f32,
+    /// Seed of the draws.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// Runs `diffbsdf table`.
+pub fn run(args: TableArgs, out: &mut dyn std::io::Write) -> Result<(), CommandError> {
+    let material = parse_spec(&args.spec).map_err(CommandError::Spec)?;
+    let bytes = std::fs::read(&args.blob).map_err(|e| CommandError::Io(args.blob.clone(), e))?;
+    let model = AnyModel::from_blob(&bytes)?;
+    let cfg = TableConfig {
+        draws_per_slice: args.draws,
+        floor: f64::from(args.floor),
+    };
+    let start = Instant::now();
+    let tabled = with_latent_table(&model, material.as_ref(), &cfg, args.seed)?;
+    writeln!(
+        out,
+        "latent table fitted, {:.1} s",
+        start.elapsed().as_secs_f64()
+    )
+    .map_err(CommandError::Output)?;
+    write_file(&args.out, &tabled.blob(Precision::F32)?)?;
+    write_file(&f16_path(&args.out), &tabled.blob(Precision::F16)?)
+}
