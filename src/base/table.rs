@@ -3,7 +3,7 @@
 //! put more of its samples where its flow alone falls short of the target.
 //!
 //! Per incidence slice the table holds `(C + 1)^2` positive node values `v[i][j]`,
-//! `C` = [`LATENT_TABLE_CELLS`], at `u = (i / C, j / C)`; its density is their bilinear
+//! `C` = [`crate::spec::LATENT_TABLE_CELLS`], at `u = (i / C, j / C)`; its density is their bilinear
 //! interpolation over the integral of that surface (74). A `wi` between two slices mixes
 //! their node values linearly (75), which keeps the density bilinear on the same grid.
 //! Sampling inverts the marginal CDF of `u_0` and then the conditional CDF of `u_1`, each
@@ -53,7 +53,7 @@ impl TableSlice {
 }
 
 /// `wi.z` at the slice position `s` (in slices, `0 ..= S - 1`): the inverse of
-/// [`TableSlice::of`]'s `s = (1 - sqrt(wi.z)) (S - 1)`, `wi.z = (1 - s / (S - 1))^2`.
+/// the slices' `s = (1 - sqrt(wi.z)) (S - 1)`, `wi.z = (1 - s / (S - 1))^2`.
 #[must_use]
 pub fn slice_incidence(s: f64) -> f64 {
     let f = (s / (S - 1) as f64).clamp(0.0, 1.0);
