@@ -198,6 +198,7 @@ impl<'a> Emitter<'a> {
         // (every density, at Phi of the standard start point).
         if self.table() {
             self.table_node();
+            self.table_columns();
         }
         if self.table() && self.needs_base_sample() {
             self.table_fraction();
@@ -306,6 +307,20 @@ impl<'a> Emitter<'a> {
                 (T::F, "vb"),
             ];
             lines.extend(self.d.struct_decl(&self.p("Root"), &f));
+        }
+        if self.table() {
+            lines.push(
+                "// The latent table's column integrals of one wi's mixed slice and their total."
+                    .into(),
+            );
+            let f = [
+                (
+                    T::Arr(Box::new(T::F), diffbsdf::internals::base::table::NODES),
+                    "m",
+                ),
+                (T::F, "tot"),
+            ];
+            lines.extend(self.d.struct_decl(&self.p("Cols"), &f));
         }
         if self.m.def.isotropic {
             lines.push("// A rotation about the normal: cos and sin of its angle.".into());

@@ -109,11 +109,24 @@ impl Emitter<'_> {
         self.end_fn();
     }
 
-    /// `arr[i] = (1 - t) M_k[i] + t M_(k+1)[i]`, `M_k[i] = sum_j w_j v_k[i][j]` (trapezoid
-    /// weights, `j` ascending: the kernel's `LatentTable::prepare`), and `tot = sum_i w_i
-    /// arr[i]` (74), (75).
-    fn table_columns(&mut self, arr: &str, tot: &str) {
-        self.arr(T::F, NODES, arr);
+    /// The function returning the mixed slice's column integrals `m[i] = (1 - t) M_k[i] + t
+    /// M_(k+1)[i]`, `M_k[i] = sum_j w_j v_k[i][j]` (trapezoid weights, `j` ascending: the
+    /// kernel's `LatentTable::prepare`), and their total `tot = sum_i w_i m[i]` (74), (75):
+    /// one function for the map and the density.
+    pub(super) fn table_columns(&mut self) {
+        self.code.line(
+            "// The mixed slice's column integrals and their total (docs/math.md, (74), (75)).",
+        );
+        let cols_t = self.st("Cols");
+        self.fn_open(
+            cols_t.clone(),
+            "table_columns",
+            true,
+            &[(self.st("Cond"), "cond")],
+        );
+        let r = self.d.decl(&cols_t, "r", None);
+        self.code.line(r);
+        let arr = "r.m";
         self.for_open("ci", &self.u(NODES));
         let (zero, one) = (self.f(0.0), self.f(1.0));
         self.decl(T::F, "sa", &zero);
@@ -134,7 +147,16 @@ impl Emitter<'_> {
             "{arr}[ci] = ({one} - cond.tt) * sa + cond.tt * sb;"
         ));
         self.code.close("}");
-        self.table_total(arr, tot);
+        self.table_total(arr, "tm");
+        self.code.line("r.tot = tm;");
+        self.code.line("return r;");
+        self.end_fn();
+    }
+
+    /// `cm`: the column integrals of the wi's mixed slice, by `table_columns`.
+    fn table_columns_call(&mut self) {
+        let call = self.call("table_columns", true, &["cond"]);
+        self.decl(self.st("Cols"), "cm", &call);
     }
 
     /// `tot = sum_i w_i arr[i]`.
@@ -207,8 +229,8 @@ impl Emitter<'_> {
         let ps = [(self.st("Cond"), "cond"), (T::F, "u0"), (T::F, "u1")];
         let vec_t = self.st("Vec2");
         self.fn_open(vec_t.clone(), "table_warp", true, &ps);
-        self.table_columns("cm", "tm");
-        self.table_invert("cm", "tm", "u0", "x0");
+        self.table_columns_call();
+        self.table_invert("cm.m", "cm.tot", "u0", "x0");
         let c = self.f(C as f32);
         self.table_cell(&format!("x0 * {c}"), "i", "a");
         self.arr(T::F, NODES, "cq");
@@ -238,7 +260,7 @@ impl Emitter<'_> {
         );
         let ps = [(self.st("Cond"), "cond"), (T::F, "x0"), (T::F, "x1")];
         self.fn_open(T::F, "table_ln_density", true, &ps);
-        self.table_columns("cm", "tm");
+        self.table_columns_call();
         let c = self.f(C as f32);
         self.table_cell(&format!("x0 * {c}"), "i", "a");
         self.table_cell(&format!("x1 * {c}"), "j", "b");
@@ -257,7 +279,10 @@ impl Emitter<'_> {
         self.decl(T::F, "lo", &lo);
         self.decl(T::F, "hi", &hi);
         self.decl(T::F, "bil", &format!("({one} - a) * lo + a * hi"));
-        let ln = self.math(Math::Log, &format!("bil * {} / tm", self.f((C * C) as f32)));
+        let ln = self.math(
+            Math::Log,
+            &format!("bil * {} / cm.tot", self.f((C * C) as f32)),
+        );
         self.code.line(format!("return {ln};"));
         self.end_fn();
     }

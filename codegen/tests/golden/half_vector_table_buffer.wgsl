@@ -60,6 +60,11 @@ struct diffbsdf_tiny_half_vector_table_Root {
     va: f32,
     vb: f32,
 }
+// The latent table's column integrals of one wi's mixed slice and their total.
+struct diffbsdf_tiny_half_vector_table_Cols {
+    m: array<f32, 17>,
+    tot: f32,
+}
 // A rotation about the normal: cos and sin of its angle.
 struct diffbsdf_tiny_half_vector_table_Frame {
     c: f32,
@@ -348,15 +353,9 @@ fn diffbsdf_tiny_half_vector_table_table_node(base: u32, cond: diffbsdf_tiny_hal
     return (1.0f - cond.tt) * diffbsdf_tiny_half_vector_table_params[base + at] + cond.tt * diffbsdf_tiny_half_vector_table_params[base + at + 289u];
 }
 
-// The fraction a of a cell, density lo to hi, holding area r: 2r / (lo + sqrt(lo^2 + 2 (hi - lo) r)) (docs/math.md, (76)).
-fn diffbsdf_tiny_half_vector_table_table_fraction(lo: f32, hi: f32, r: f32) -> f32 {
-    var disc: f32 = max(lo * lo + 2.0f * (hi - lo) * r, 0.0f);
-    return clamp(2.0f * r / (lo + sqrt(disc)), 0.0f, 1.0f);
-}
-
-// u drawn through the latent table: u0 by the marginal CDF, u1 by the conditional one (docs/math.md, (76)).
-fn diffbsdf_tiny_half_vector_table_table_warp(base: u32, cond: diffbsdf_tiny_half_vector_table_Cond, u0: f32, u1: f32) -> diffbsdf_tiny_half_vector_table_Vec2 {
-    var cm: array<f32, 17>;
+// The mixed slice's column integrals and their total (docs/math.md, (74), (75)).
+fn diffbsdf_tiny_half_vector_table_table_columns(base: u32, cond: diffbsdf_tiny_half_vector_table_Cond) -> diffbsdf_tiny_half_vector_table_Cols {
+    var r: diffbsdf_tiny_half_vector_table_Cols;
     for (var ci = 0u; ci < 17u; ci++) {
         var sa: f32 = 0.0f;
         var sb: f32 = 0.0f;
@@ -369,7 +368,7 @@ fn diffbsdf_tiny_half_vector_table_table_warp(base: u32, cond: diffbsdf_tiny_hal
             sa = sa + tw * diffbsdf_tiny_half_vector_table_params[base + at];
             sb = sb + tw * diffbsdf_tiny_half_vector_table_params[base + at + 289u];
         }
-        cm[ci] = (1.0f - cond.tt) * sa + cond.tt * sb;
+        r.m[ci] = (1.0f - cond.tt) * sa + cond.tt * sb;
     }
     var tm: f32 = 0.0f;
     for (var ti = 0u; ti < 17u; ti++) {
@@ -377,19 +376,32 @@ fn diffbsdf_tiny_half_vector_table_table_warp(base: u32, cond: diffbsdf_tiny_hal
         if (ti == 0u || ti == 16u) {
             tw = 0.5f;
         }
-        tm = tm + tw * cm[ti];
+        tm = tm + tw * r.m[ti];
     }
-    var rem: f32 = u0 * tm;
+    r.tot = tm;
+    return r;
+}
+
+// The fraction a of a cell, density lo to hi, holding area r: 2r / (lo + sqrt(lo^2 + 2 (hi - lo) r)) (docs/math.md, (76)).
+fn diffbsdf_tiny_half_vector_table_table_fraction(lo: f32, hi: f32, r: f32) -> f32 {
+    var disc: f32 = max(lo * lo + 2.0f * (hi - lo) * r, 0.0f);
+    return clamp(2.0f * r / (lo + sqrt(disc)), 0.0f, 1.0f);
+}
+
+// u drawn through the latent table: u0 by the marginal CDF, u1 by the conditional one (docs/math.md, (76)).
+fn diffbsdf_tiny_half_vector_table_table_warp(base: u32, cond: diffbsdf_tiny_half_vector_table_Cond, u0: f32, u1: f32) -> diffbsdf_tiny_half_vector_table_Vec2 {
+    var cm: diffbsdf_tiny_half_vector_table_Cols = diffbsdf_tiny_half_vector_table_table_columns(base, cond);
+    var rem: f32 = u0 * cm.tot;
     var cell: u32 = 0u;
     for (var n = 0u; n < 15u; n++) {
-        var area: f32 = 0.5f * (cm[cell] + cm[cell + 1u]);
+        var area: f32 = 0.5f * (cm.m[cell] + cm.m[cell + 1u]);
         if (rem <= area) {
             break;
         }
         rem = rem - area;
         cell = cell + 1u;
     }
-    var x0: f32 = clamp((f32(cell) + diffbsdf_tiny_half_vector_table_table_fraction(cm[cell], cm[cell + 1u], rem)) / 16.0f, 0.0f, 1.0f);
+    var x0: f32 = clamp((f32(cell) + diffbsdf_tiny_half_vector_table_table_fraction(cm.m[cell], cm.m[cell + 1u], rem)) / 16.0f, 0.0f, 1.0f);
     var i: u32 = u32(max(x0 * 16.0f, 0.0f));
     if (i > 15u) {
         i = 15u;
@@ -450,29 +462,7 @@ fn diffbsdf_tiny_half_vector_table_normal_cdf(z: f32) -> f32 {
 
 // ln of the latent table's density: the mixed nodes' bilinear interpolation times C^2 over their total (docs/math.md, (74)).
 fn diffbsdf_tiny_half_vector_table_table_ln_density(base: u32, cond: diffbsdf_tiny_half_vector_table_Cond, x0: f32, x1: f32) -> f32 {
-    var cm: array<f32, 17>;
-    for (var ci = 0u; ci < 17u; ci++) {
-        var sa: f32 = 0.0f;
-        var sb: f32 = 0.0f;
-        for (var cj = 0u; cj < 17u; cj++) {
-            var tw: f32 = 1.0f;
-            if (cj == 0u || cj == 16u) {
-                tw = 0.5f;
-            }
-            var at: u32 = 152u + cond.tk * 289u + ci * 17u + cj;
-            sa = sa + tw * diffbsdf_tiny_half_vector_table_params[base + at];
-            sb = sb + tw * diffbsdf_tiny_half_vector_table_params[base + at + 289u];
-        }
-        cm[ci] = (1.0f - cond.tt) * sa + cond.tt * sb;
-    }
-    var tm: f32 = 0.0f;
-    for (var ti = 0u; ti < 17u; ti++) {
-        var tw: f32 = 1.0f;
-        if (ti == 0u || ti == 16u) {
-            tw = 0.5f;
-        }
-        tm = tm + tw * cm[ti];
-    }
+    var cm: diffbsdf_tiny_half_vector_table_Cols = diffbsdf_tiny_half_vector_table_table_columns(base, cond);
     var i: u32 = u32(max(x0 * 16.0f, 0.0f));
     if (i > 15u) {
         i = 15u;
@@ -486,7 +476,7 @@ fn diffbsdf_tiny_half_vector_table_table_ln_density(base: u32, cond: diffbsdf_ti
     var lo: f32 = (1.0f - b) * diffbsdf_tiny_half_vector_table_table_node(base, cond, i, j) + b * diffbsdf_tiny_half_vector_table_table_node(base, cond, i, j + 1u);
     var hi: f32 = (1.0f - b) * diffbsdf_tiny_half_vector_table_table_node(base, cond, i + 1u, j) + b * diffbsdf_tiny_half_vector_table_table_node(base, cond, i + 1u, j + 1u);
     var bil: f32 = (1.0f - a) * lo + a * hi;
-    return log(bil * 256.0f / tm);
+    return log(bil * 256.0f / cm.tot);
 }
 
 // y0 for u: the standard normal's quantiles, warped (the flow runs in warped standard coordinates).
