@@ -28,6 +28,10 @@ pub struct TableArgs {
     /// Share of the uniform density in every slice.
     #[arg(long, default_value_t = TableConfig::DEFAULT.floor as f32, value_parser = parse_share)]
     pub floor: f32,
+    /// Multiplicative updates of the node values towards the least variance after their
+    /// root-mean-square start (docs/math.md, (78); 0: the start alone).
+    #[arg(long, default_value_t = TableConfig::DEFAULT.iterations)]
+    pub iterations: usize,
     /// Seed of the draws.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -41,6 +45,7 @@ pub fn run(args: TableArgs, out: &mut dyn std::io::Write) -> Result<(), CommandE
     let cfg = TableConfig {
         draws_per_slice: args.draws,
         floor: f64::from(args.floor),
+        iterations: args.iterations,
     };
     let start = Instant::now();
     let tabled = with_latent_table(&model, material.as_ref(), &cfg, args.seed)?;
