@@ -51,6 +51,17 @@ impl TableConfig {
     };
 }
 
+/// What the fit did, on its own draws: the relative variance `E[q^2] / E[q]^2 - 1` of the
+/// flow alone and `E[q^2 / T] / E[q]^2 - 1` with the stored table, each the mean over the
+/// slices (in-sample: the nodes were fitted to these draws).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TableFit {
+    /// Mean relative variance of the flow alone.
+    pub rv_flow: f64,
+    /// Mean relative variance with the table.
+    pub rv_table: f64,
+}
+
 /// `model` with a latent table fitted against `material` (a model that has one gets a new
 /// one fitted to its flow alone). Needs standard coordinates.
 pub fn with_latent_table(
@@ -59,24 +70,40 @@ pub fn with_latent_table(
     cfg: &TableConfig,
     seed: u64,
 ) -> Result<AnyModel, TrainError> {
+    fit_latent_table(model, material, cfg, seed).map(|(m, _)| m)
+}
+
+/// [`with_latent_table`], and what the fit did on its draws.
+pub fn fit_latent_table(
+    model: &AnyModel,
+    material: &dyn Material,
+    cfg: &TableConfig,
+    seed: u64,
+) -> Result<(AnyModel, TableFit), TrainError> {
     let def = *model.def();
     if !def.standardized {
         return Err(TrainError::Mismatch);
     }
     let flow = without_table(model)?;
-    let slices: Vec<Vec<f32>> = (0..S)
+    let slices: Vec<(Vec<f32>, TableFit)> = (0..S)
         .into_par_iter()
         .map(|k| fit_slice(&flow, material, cfg, seed, k))
         .collect();
+    let count = slices.len().max(1) as f64;
+    let fit = TableFit {
+        rv_flow: slices.iter().map(|s| s.1.rv_flow).sum::<f64>() / count,
+        rv_table: slices.iter().map(|s| s.1.rv_table).sum::<f64>() / count,
+    };
     let mut params = vec![0.0f32; flow.def().param_count()];
     flow.params(&mut params).map_err(TrainError::Blob)?;
-    params.extend(slices.into_iter().flatten());
+    params.extend(slices.into_iter().flat_map(|s| s.0));
     debug_assert_eq!(params.len(), flow.def().param_count() + TABLE_LEN);
     let table_def = ModelDef {
         latent_table: true,
         ..def
     };
-    AnyModel::from_params(table_def, &params).map_err(TrainError::Blob)
+    let tabled = AnyModel::from_params(table_def, &params).map_err(TrainError::Blob)?;
+    Ok((tabled, fit))
 }
 
 /// The same model without its latent table (itself where it has none).
@@ -131,28 +158,54 @@ fn integral(v: &[f64]) -> f64 {
     v.iter().enumerate().map(|(n, x)| node_weight(n) * x).sum()
 }
 
-/// One slice's node values: the fitted density, normalised and mixed with the uniform
-/// density.
+/// One slice's node values (the fitted density, normalised and mixed with the uniform
+/// density) and the relative variance on its draws before and after.
 fn fit_slice(
     flow: &AnyModel,
     material: &dyn Material,
     cfg: &TableConfig,
     seed: u64,
     k: usize,
-) -> Vec<f32> {
+) -> (Vec<f32>, TableFit) {
     let draws = slice_draws(flow, material, cfg, seed, k);
     let mut v = root_mean_square(&draws);
     for _ in 0..cfg.iterations {
         descend(&mut v, &draws, cfg.floor);
     }
     let total = integral(&v);
-    v.iter()
+    let values: Vec<f32> = v
+        .iter()
         .map(|&x| {
             let shaped = if total > 0.0 { x / total } else { 1.0 };
             let mixed = (1.0 - cfg.floor) * shaped + cfg.floor;
             (mixed as f32).clamp(f32::MIN_POSITIVE, LATENT_TABLE_VALUE_MAX)
         })
-        .collect()
+        .collect();
+    let stored: Vec<f64> = values.iter().map(|&x| f64::from(x)).collect();
+    let fit = TableFit {
+        rv_flow: relative_variance(&draws, None),
+        rv_table: relative_variance(&draws, Some(&stored)),
+    };
+    (values, fit)
+}
+
+/// `E[q^2 / T] / E[q]^2 - 1` over the draws, `T` the normalised bilinear surface of the
+/// node values `v` (the uniform density for `None`); 0 where every weight is 0.
+fn relative_variance(draws: &[SliceDraw], v: Option<&[f64]>) -> f64 {
+    let total = v.map_or(1.0, integral);
+    let (mut first, mut second) = (0.0, 0.0);
+    for d in draws {
+        let t = v.map_or(1.0, |v| {
+            d.corners().iter().map(|&(n, w)| w * v[n]).sum::<f64>() / total
+        });
+        first += d.q2.sqrt();
+        second += d.q2 / t;
+    }
+    if first > 0.0 {
+        draws.len() as f64 * second / (first * first) - 1.0
+    } else {
+        0.0
+    }
 }
 
 /// The slice's draws: incidence from the slice's hat, `u` uniform.

@@ -7,7 +7,7 @@ use super::share::parse_share;
 use clap::Args;
 use diffbsdf::{AnyModel, Precision};
 use diffbsdf_materials::parse_spec;
-use diffbsdf_train::latent_table::{with_latent_table, TableConfig};
+use diffbsdf_train::latent_table::{fit_latent_table, TableConfig};
 use diffbsdf_train::ModelExt;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -48,11 +48,13 @@ pub fn run(args: TableArgs, out: &mut dyn std::io::Write) -> Result<(), CommandE
         iterations: args.iterations,
     };
     let start = Instant::now();
-    let tabled = with_latent_table(&model, material.as_ref(), &cfg, args.seed)?;
+    let (tabled, fit) = fit_latent_table(&model, material.as_ref(), &cfg, args.seed)?;
     writeln!(
         out,
-        "latent table fitted, {:.1} s",
-        start.elapsed().as_secs_f64()
+        "latent table fitted, {:.1} s; mean relative variance on its draws {:.5} (flow alone) -> {:.5}",
+        start.elapsed().as_secs_f64(),
+        fit.rv_flow,
+        fit.rv_table
     )
     .map_err(CommandError::Output)?;
     write_file(&args.out, &tabled.blob(Precision::F32)?)?;
