@@ -63,17 +63,8 @@ pub struct TableFit {
 }
 
 /// `model` with a latent table fitted against `material` (a model that has one gets a new
-/// one fitted to its flow alone). Needs standard coordinates.
-pub fn with_latent_table(
-    model: &AnyModel,
-    material: &dyn Material,
-    cfg: &TableConfig,
-    seed: u64,
-) -> Result<AnyModel, TrainError> {
-    fit_latent_table(model, material, cfg, seed).map(|(m, _)| m)
-}
-
-/// [`with_latent_table`], and what the fit did on its draws.
+/// one fitted to its flow alone), and what the fit did on its draws. Needs standard
+/// coordinates.
 pub fn fit_latent_table(
     model: &AnyModel,
     material: &dyn Material,
