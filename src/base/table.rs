@@ -60,9 +60,11 @@ pub fn slice_incidence(s: f64) -> f64 {
     (1.0 - f) * (1.0 - f)
 }
 
-/// `0.5` at the grid's two ends, `1` inside: the trapezoid rule's weights.
+/// `0.5` at the grid's two ends, `1` inside: the trapezoid rule's weight of node `i` along
+/// one axis (the bilinear surface's integral is `sum_ij w_i w_j v_ij / C^2`, (74)).
 #[inline(always)]
-fn trapezoid(i: usize) -> f32 {
+#[must_use]
+pub fn trapezoid(i: usize) -> f32 {
     if i == 0 || i == C {
         0.5
     } else {

@@ -14,7 +14,7 @@
 
 use crate::error::TrainError;
 use crate::metrics::sampler::{from_glam, to_glam, weight, Drawn};
-use diffbsdf::internals::base::table::{slice_incidence, NODES, SLICE_LEN, TABLE_LEN};
+use diffbsdf::internals::base::table::{slice_incidence, trapezoid, NODES, SLICE_LEN, TABLE_LEN};
 use diffbsdf::spec::{LATENT_TABLE_CELLS as C, LATENT_TABLE_SLICES as S, LATENT_TABLE_VALUE_MAX};
 use diffbsdf::{AnyModel, ModelDef};
 use diffbsdf_materials::{DVec3, Material};
@@ -132,16 +132,10 @@ impl SliceDraw {
     }
 }
 
-/// `0.5` at the grid's two ends, `1` inside, over `C`: the trapezoid rule's weight of a
-/// node per axis, so that `sum_ij w_i w_j v_ij` is the bilinear surface's integral.
-fn trapezoid(i: usize) -> f64 {
-    let w = if i == 0 || i == C { 0.5 } else { 1.0 };
-    w / C as f64
-}
-
-/// The node's weight in the bilinear surface's integral.
+/// The node's weight in the bilinear surface's integral over the unit square: the
+/// kernel's trapezoid weights per axis over `C^2` (docs/math.md, (74)).
 fn node_weight(n: usize) -> f64 {
-    trapezoid(n / NODES) * trapezoid(n % NODES)
+    f64::from(trapezoid(n / NODES)) * f64::from(trapezoid(n % NODES)) / (C * C) as f64
 }
 
 /// The bilinear surface's integral over the unit square.
