@@ -2,6 +2,7 @@
 //! stores it, the kernel checks it against its compiled shape, and codegen and the trainer
 //! read it.
 
+pub use crate::base::table::TableGrid;
 use crate::spec::{BASE_OUTPUTS, ENCODING_PER_FREQ, ENCODING_RAW, VELOCITY_OUTPUTS};
 
 /// Where the flow lives, and so how a point `x` of the flow maps to a direction.
@@ -282,9 +283,10 @@ pub struct ModelDef {
     pub standard_warp: bool,
     /// With [`ModelDef::standardized`]: `u` is drawn through the latent table, a bilinear
     /// density on `[0, 1]^2` per incidence slice, fitted to where the flow alone falls short
-    /// (docs/math.md, §6.5; blob flag bit 4; its node values follow the nets' weights). A
-    /// header error without `standardized`.
-    pub latent_table: bool,
+    /// (docs/math.md, §6.5; blob flag bit 4; its nodes follow the nets' weights), on the
+    /// given grid ([`TableGrid::Codes`]: flag bit 5). A header error without
+    /// `standardized`.
+    pub latent_table: Option<TableGrid>,
     /// A short label (codegen names things after it).
     pub name: ModelName,
 }
@@ -313,7 +315,7 @@ impl ModelDef {
             incident: IncidentRange::UpperHemisphere,
             standardized: false,
             standard_warp: false,
-            latent_table: false,
+            latent_table: None,
             name: ModelName::EMPTY,
         }
     }
@@ -423,14 +425,13 @@ impl ModelDef {
         self.net_param_count(Net::Base) + self.net_param_count(Net::Velocity) + self.table_len()
     }
 
-    /// Node values of the latent table the blob stores after the nets' weights:
-    /// [`crate::base::table::TABLE_LEN`] with [`ModelDef::latent_table`], else 0.
+    /// Node values of the latent table the blob stores after the nets' weights (its grid's
+    /// [`TableGrid::node_count`]; 0 without a table).
     #[must_use]
     pub const fn table_len(&self) -> usize {
-        if self.latent_table {
-            crate::base::table::TABLE_LEN
-        } else {
-            0
+        match self.latent_table {
+            Some(grid) => grid.node_count(),
+            None => 0,
         }
     }
 }

@@ -59,7 +59,7 @@ pub use batch::BatchError;
 pub use blob::BlobError;
 pub use def::{
     encoding_len, Activation, Domain, IncidentRange, Layer, ModelDef, ModelName, Net, NetShape,
-    Precision, NAME_CAPACITY,
+    Precision, TableGrid, NAME_CAPACITY,
 };
 pub use model::{Model, Model3x32, Model4x32};
 pub use sampler::Sample;

@@ -57,7 +57,7 @@ impl<
             && BE <= VE
             && !(def.standardized && def.domain.is_spherical())
             && (def.standardized || !def.standard_warp)
-            && (def.standardized || !def.latent_table)
+            && (def.standardized || def.latent_table.is_none())
     }
 
     /// Loads and validates a blob.
@@ -65,7 +65,7 @@ impl<
         let blob = Blob::parse(bytes)?;
         let mut model = Self::zeroed(blob.def)?;
         let mut weights = blob.weights();
-        model.visit_params_mut(|p| *p = weights.next().unwrap_or(0.0));
+        model.load_params(|| weights.next().unwrap_or(0.0));
         Ok(model)
     }
 
@@ -81,9 +81,8 @@ impl<
         // `from_blob`.
         self.base = BaseNet::ZERO;
         self.velocity = VelocityNet::ZERO;
-        self.table = LatentTable::UNIFORM;
         let mut weights = blob.weights();
-        self.visit_params_mut(|p| *p = weights.next().unwrap_or(0.0));
+        self.load_params(|| weights.next().unwrap_or(0.0));
         Ok(())
     }
 
@@ -117,9 +116,9 @@ impl<
             });
         }
         let first_table = from_shape - self.def.table_len();
-        crate::blob::check_params(params.iter().copied(), first_table)?;
+        crate::blob::check_params(params.iter().copied(), first_table, self.def.latent_table)?;
         let mut it = params.iter();
-        self.visit_params_mut(|p| *p = it.next().copied().unwrap_or(0.0));
+        self.load_params(|| it.next().copied().unwrap_or(0.0));
         Ok(())
     }
 
@@ -160,24 +159,27 @@ impl<
         self.def.default_steps = default_steps.clamp(1, crate::spec::MAX_STEPS as u16);
     }
 
-    /// Reads every parameter in blob order (the order of `visit_params_mut`).
+    /// Reads every parameter in blob order (the order of `load_params`); a coded table's
+    /// nodes as their codes' values.
     fn visit_params(&self, mut f: impl FnMut(f32)) {
         let features = self.def.domain.feature_count();
         self.base.visit(&mut f);
         self.velocity.visit(features, &mut f);
-        if self.def.latent_table {
+        if self.def.latent_table.is_some() {
             self.table.visit(&mut f);
         }
     }
 
-    /// Visits every parameter in blob order (`docs/blob-format.md`).
-    fn visit_params_mut(&mut self, mut f: impl FnMut(&mut f32)) {
+    /// Sets every parameter from `next`, in blob order (`docs/blob-format.md`): the nets'
+    /// weights, then the latent table's nodes (the uniform table without one).
+    fn load_params(&mut self, mut next: impl FnMut() -> f32) {
         let features = self.def.domain.feature_count();
-        self.base.visit_mut(&mut f);
-        self.velocity.visit_mut(features, &mut f);
-        if self.def.latent_table {
-            self.table.visit_mut(&mut f);
+        self.base.visit_mut(&mut |p: &mut f32| *p = next());
+        self.velocity
+            .visit_mut(features, &mut |p: &mut f32| *p = next());
+        match self.def.latent_table {
+            Some(grid) => self.table.load(grid, self.def.precision, &mut next),
+            None => self.table = LatentTable::UNIFORM,
         }
-        self.table.prepare();
     }
 }

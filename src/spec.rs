@@ -144,9 +144,15 @@ pub const ERFC_POLY: [f32; 10] = [
 // The latent table (docs/math.md, §6.5; `ModelDef::latent_table`)
 // ---------------------------------------------------------------------------------------
 
-/// Cells per side of the latent table's grid on `[0, 1]^2`; its bilinear density has
-/// `(LATENT_TABLE_CELLS + 1)^2` nodes per slice.
-pub const LATENT_TABLE_CELLS: usize = 16;
+/// Cells per side of the latent table's grid on `[0, 1]^2` where the blob stores its nodes
+/// as 8-bit codes (blob flag bit 5; [`crate::base::table::TableGrid::Codes`], the grid the
+/// trainer fits); the bilinear density has `(LATENT_TABLE_CELLS + 1)^2` nodes per slice.
+pub const LATENT_TABLE_CELLS: usize = 32;
+
+/// Cells per side of a latent table whose nodes the blob stores as values of its precision
+/// (flag bit 4 without bit 5, [`crate::base::table::TableGrid::Values`]: the blobs written
+/// before the coded table).
+pub const LATENT_TABLE_VALUE_CELLS: usize = 16;
 
 /// Incidence slices of the latent table, at `s = 1 - sqrt(wi.z)` evenly spaced on `[0, 1]`
 /// (dense towards grazing incidence, where the target changes fastest); a `wi` between two
@@ -157,6 +163,39 @@ pub const LATENT_TABLE_SLICES: usize = 32;
 /// outside `(0, LATENT_TABLE_VALUE_MAX]` is refused): the sums over a slice stay far from
 /// overflow and every cell's density positive.
 pub const LATENT_TABLE_VALUE_MAX: f32 = 1e6;
+
+/// Codes per doubling of a coded table's node value: code `c` stands for
+/// `2^((c - LATENT_TABLE_CODE_ONE) / LATENT_TABLE_CODE_STEPS)` (docs/math.md, (79)), a
+/// 4.4 % step, below what the fit resolves (docs/measured-materials.md, "A finer table in
+/// 8-bit codes").
+pub const LATENT_TABLE_CODE_STEPS: u8 = 16;
+
+/// The code of node value 1. Code 0 is refused (a zeroed table section is not a table), so
+/// codes span `2^(-79/16)` = 0.032 to `2^(175/16)` = 1 966: a slice normalised to integral
+/// 1 with its 5 % uniform share has every node at least 0.05.
+pub const LATENT_TABLE_CODE_ONE: u8 = 80;
+
+/// `2^(r / 16)`, `r = 0..16`, rounded to f32: code `c` with `c - LATENT_TABLE_CODE_ONE = 16
+/// q + r` (`0 <= r < 16`) has the value `LATENT_TABLE_CODE_FRACTIONS[r] * 2^q`, a product
+/// by a power of two, exact in every language.
+pub const LATENT_TABLE_CODE_FRACTIONS: [f32; 16] = [
+    1.0,
+    1.044_273_7,
+    1.090_507_7,
+    1.138_788_6,
+    1.189_207_1,
+    1.241_857_8,
+    1.296_839_6,
+    1.354_255_6,
+    core::f32::consts::SQRT_2,
+    1.476_826_2,
+    1.542_210_8,
+    1.610_490_3,
+    1.681_792_9,
+    1.756_252_2,
+    1.834_008_1,
+    1.915_206_6,
+];
 
 /// `ln(1/sqrt(2 pi))`, the normal log-density's constant.
 pub const LN_INV_SQRT_2PI: f32 = -0.918_938_5;
@@ -263,5 +302,13 @@ mod tests {
         assert!((LN_4PI as f64 - libm::log(4.0 * pi)).abs() < 1e-6);
         assert!((LN_SCALE_MIN as f64 - libm::log(1e-4)).abs() < 1e-5);
         assert_eq!(GAUSSIAN_TAIL_MIN, 1.0 / (1u64 << 40) as f32);
+    }
+
+    #[test]
+    fn code_fractions_are_the_f32_roots_of_two() {
+        for (r, &f) in LATENT_TABLE_CODE_FRACTIONS.iter().enumerate() {
+            let exact = libm::exp2(r as f64 / f64::from(LATENT_TABLE_CODE_STEPS));
+            assert_eq!(f, exact as f32, "r = {r}");
+        }
     }
 }

@@ -4,7 +4,7 @@
 mod support;
 
 use diffbsdf::internals::blob::{blob_len, crc32, write_blob, Blob, CHECKSUM_LEN, HEADER_LEN};
-use diffbsdf::{BlobError, Model3x32, Model4x32, ModelName, Precision};
+use diffbsdf::{BlobError, Model3x32, Model4x32, ModelName, Precision, TableGrid};
 use proptest::prelude::*;
 use support::{
     random_disk, random_sphere, random_standardized_half_vector, random_warped_half_vector,
@@ -86,10 +86,15 @@ fn expected_kind(offset: usize, err: &BlobError) -> bool {
                 | BlobError::Truncated { .. }
                 | BlobError::TrailingBytes { .. }
         ),
-        // parameter count: another length (or an overflow)
-        24..=27 => matches!(
+        // parameter count, and the flags' latent-table bits 4 and 5: another length (or an
+        // overflow, a count below the table's, or bit 5 without bit 4); the other flag bits
+        // are checked behind the checksum
+        24..=28 => matches!(
             err,
-            BlobError::Truncated { .. } | BlobError::TrailingBytes { .. } | BlobError::BadHeader(_)
+            BlobError::Truncated { .. }
+                | BlobError::TrailingBytes { .. }
+                | BlobError::BadHeader(_)
+                | BlobError::ChecksumMismatch { .. }
         ),
         _ => matches!(err, BlobError::ChecksumMismatch { .. }),
     }
@@ -208,13 +213,13 @@ fn standard_coordinates_flag_round_trips_and_is_refused_on_the_sphere() {
     }
 }
 
-/// A model with a latent table (docs/math.md, §6.5): the warped half-vector model with
-/// node values from a smooth positive function.
-fn random_table_model(seed: u64) -> Model3x32 {
+/// A model with a latent table on `grid` (docs/math.md, §6.5): the warped half-vector
+/// model with node values from a smooth positive function.
+fn random_table_model(seed: u64, grid: TableGrid) -> Model3x32 {
     let m = random_warped_half_vector(seed, 2);
     let mut params = params_of(&m);
     let def = diffbsdf::ModelDef {
-        latent_table: true,
+        latent_table: Some(grid),
         ..*m.def()
     };
     for i in 0..def.table_len() {
@@ -223,19 +228,21 @@ fn random_table_model(seed: u64) -> Model3x32 {
     Model3x32::from_params(def, &params).unwrap()
 }
 
-/// The latent table's flag (bit 4) and node values survive a write / read round trip in
-/// both precisions; without standard coordinates the flag is a header error, and a node
-/// value that is not positive, or above `LATENT_TABLE_VALUE_MAX`, a `TableValueOutOfRange`
-/// at its index, from a blob as from a parameter vector.
+/// The table of blob-precision values (flag bit 4 alone, the blobs written before the
+/// coded table): its flag and node values survive a write / read round trip in both
+/// precisions; without standard coordinates the flag is a header error, and a node value
+/// that is not positive, or above `LATENT_TABLE_VALUE_MAX`, a `TableValueOutOfRange` at its
+/// index, from a blob as from a parameter vector.
 #[test]
 fn latent_table_round_trips_and_out_of_range_values_are_refused() {
-    let m = random_table_model(6);
+    let m = random_table_model(6, TableGrid::Values);
     let first_table = m.def().param_count() - m.def().table_len();
+    assert_eq!(m.def().table_len(), 32 * 17 * 17);
     for precision in [Precision::F32, Precision::F16] {
         let bytes = blob_of(&m, precision);
-        assert_eq!(bytes[28] & 16, 16);
+        assert_eq!(bytes[28] & 48, 16);
         let back = Model3x32::from_blob(&bytes).unwrap();
-        assert!(back.def().latent_table);
+        assert_eq!(back.def().latent_table, Some(TableGrid::Values));
         let (a, b) = (params_of(&m), params_of(&back));
         // Node values in [0.1, 1.9]: f16 keeps them to 2^-11 relative.
         assert!(a[first_table..]
@@ -268,6 +275,67 @@ fn latent_table_round_trips_and_out_of_range_values_are_refused() {
             BlobError::TableValueOutOfRange { index }
         );
     }
+}
+
+/// The coded table (flag bits 4 and 5): one byte per node after the nets' weights in
+/// either precision, a read / write round trip bit-exact, its values the codes' (f16-rounded
+/// in an f16 blob); a value between two codes is stored as the nearer, one outside the
+/// codes' range and code 0 are a `TableValueOutOfRange` at their index, bit 5 without bit 4
+/// a header error.
+#[test]
+fn coded_table_round_trips_and_refuses_what_no_code_holds() {
+    let m = random_table_model(7, TableGrid::Codes);
+    let def = *m.def();
+    let first_table = def.param_count() - def.table_len();
+    assert_eq!(def.table_len(), 32 * 33 * 33);
+    for precision in [Precision::F32, Precision::F16] {
+        let bytes = blob_of(&m, precision);
+        assert_eq!(bytes[28] & 48, 48);
+        let len = HEADER_LEN + first_table * precision.bytes() + def.table_len() + CHECKSUM_LEN;
+        assert_eq!(bytes.len(), len, "{precision:?}");
+        let back = Model3x32::from_blob(&bytes).unwrap();
+        assert_eq!(back.def().latent_table, Some(TableGrid::Codes));
+        assert_eq!(blob_of(&back, precision), bytes, "{precision:?} round trip");
+        let (a, b) = (params_of(&m), params_of(&back));
+        for (x, y) in a[first_table..].iter().zip(&b[first_table..]) {
+            match precision {
+                Precision::F32 => assert_eq!(x, y),
+                Precision::F16 => assert!((x - y).abs() <= 1e-3 * x, "{x} vs {y}"),
+            }
+        }
+    }
+    // Stored as the nearer code: 1.02 is 0.46 of a code step above 1, 1.03 0.68.
+    let mut p = params_of(&m);
+    p[first_table] = 1.02;
+    p[first_table + 1] = 1.03;
+    let snapped = params_of(&Model3x32::from_params(def, &p).unwrap());
+    assert_eq!(snapped[first_table], 1.0);
+    assert_eq!(snapped[first_table + 1], 1.044_273_7);
+    let index = first_table + 300;
+    for bad in [0.0f32, -1.0, 1e-3, 3000.0, f32::NAN] {
+        let mut p = params_of(&m);
+        p[index] = bad;
+        let want = if bad.is_nan() {
+            BlobError::NonFiniteWeight { index }
+        } else {
+            BlobError::TableValueOutOfRange { index }
+        };
+        assert_eq!(Model3x32::from_params(def, &p).unwrap_err(), want, "{bad}");
+    }
+    let mut b = blob_of(&m, Precision::F32);
+    b[HEADER_LEN + 4 * first_table + 300] = 0;
+    reseal(&mut b);
+    assert_eq!(
+        Model3x32::from_blob(&b).unwrap_err(),
+        BlobError::TableValueOutOfRange { index }
+    );
+    let mut b = blob_of(&m, Precision::F32);
+    b[28] &= !16;
+    reseal(&mut b);
+    assert!(matches!(
+        Model3x32::from_blob(&b),
+        Err(BlobError::BadHeader(_))
+    ));
 }
 
 #[test]

@@ -6,7 +6,7 @@
 
 mod support;
 
-use diffbsdf::{Domain, ModelDef, ModelName, NetShape, Precision};
+use diffbsdf::{Domain, ModelDef, ModelName, NetShape, Precision, TableGrid};
 use diffbsdf_codegen::{generate, EntryPoints, Float, Language, Options, Weights};
 use std::path::Path;
 use support::vectors::random_blob;
@@ -15,12 +15,12 @@ use support::vectors::random_blob;
 /// The disk one is isotropic, so the incident-frame rotation is in the goldens too; the
 /// half-vector one runs its flow in standard coordinates (docs/math.md, §6.3).
 fn tiny(domain: Domain, name: &str) -> Vec<u8> {
-    tiny_with_table(domain, name, false)
+    tiny_with_table(domain, name, None)
 }
 
-/// [`tiny`], with a latent table in front of the half-vector flow when `table` (its node
-/// values in the parameter buffer: the golden files use buffer mode for it).
-fn tiny_with_table(domain: Domain, name: &str, table: bool) -> Vec<u8> {
+/// [`tiny`], with a latent table on `table`'s grid in front of the half-vector flow (its
+/// node values in the parameter buffer: the golden files use buffer mode for it).
+fn tiny_with_table(domain: Domain, name: &str, table: Option<TableGrid>) -> Vec<u8> {
     let def = ModelDef {
         domain,
         precision: Precision::F32,
@@ -55,7 +55,11 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
     let disk = tiny(Domain::Disk, "tiny disk");
     let sphere = tiny(Domain::Sphere, "tiny-sphere");
     let half_vector = tiny(Domain::HalfVector, "tiny half vector");
-    let table = tiny_with_table(Domain::HalfVector, "tiny half vector table", true);
+    let table = tiny_with_table(
+        Domain::HalfVector,
+        "tiny half vector table",
+        Some(TableGrid::Codes),
+    );
     let opt = |language, float, weights, entry_points| Options {
         language,
         float,

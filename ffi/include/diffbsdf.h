@@ -63,7 +63,7 @@ typedef enum diffbsdf_status {
     DIFFBSDF_ERR_NON_FINITE_WEIGHT = -20,  /**< Blob: a weight is NaN or infinite. */
     DIFFBSDF_ERR_SHAPE_MISMATCH = -21,     /**< Blob: an architecture this library is not compiled for. */
     DIFFBSDF_ERR_BUFFER_TOO_SMALL = -22,   /**< An output buffer is too small. */
-    DIFFBSDF_ERR_TABLE_VALUE = -23         /**< Blob: a latent-table value is out of range. */
+    DIFFBSDF_ERR_TABLE_VALUE = -23         /**< Blob: a latent-table value or code is out of range. */
 } diffbsdf_status;
 
 /** Opaque loaded model. Either allocate diffbsdf_model_size() bytes aligned to

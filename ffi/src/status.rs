@@ -47,7 +47,7 @@ pub enum diffbsdf_status {
     DIFFBSDF_ERR_SHAPE_MISMATCH = -21,
     /// An output buffer is too small.
     DIFFBSDF_ERR_BUFFER_TOO_SMALL = -22,
-    /// Blob: a latent-table value is not positive or too large.
+    /// Blob: a latent-table value is not positive, too large, or a coded node is 0.
     DIFFBSDF_ERR_TABLE_VALUE = -23,
 }
 

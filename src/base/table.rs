@@ -2,8 +2,9 @@
 //! the unit square of `u` that the base distribution is drawn through, so that a model can
 //! put more of its samples where its flow alone falls short of the target.
 //!
-//! Per incidence slice the table holds `(C + 1)^2` positive node values `v[i][j]`,
-//! `C` = [`crate::spec::LATENT_TABLE_CELLS`], at `u = (i / C, j / C)`; its density is their bilinear
+//! Per incidence slice the table holds `(C + 1)^2` positive node values `v[i][j]` at
+//! `u = (i / C, j / C)`, `C` the grid's cells per side ([`TableGrid::cells`]: 32 where the
+//! blob stores 8-bit codes, 16 in blobs written before them); its density is their bilinear
 //! interpolation over the integral of that surface (74). A `wi` between two slices mixes
 //! their node values linearly (75), which keeps the density bilinear on the same grid.
 //! Sampling inverts the marginal CDF of `u_0` and then the conditional CDF of `u_1`, each
@@ -12,25 +13,134 @@
 //! Every formula is a sum, a product, a division or a square root, written as the generated
 //! GLSL, WGSL and C write it.
 
+use crate::def::Precision;
 use crate::math::{ln, sqrt};
-use crate::spec::{LATENT_TABLE_CELLS as C, LATENT_TABLE_SLICES as S};
+use crate::spec::{
+    LATENT_TABLE_CELLS, LATENT_TABLE_CODE_FRACTIONS, LATENT_TABLE_CODE_ONE,
+    LATENT_TABLE_CODE_STEPS, LATENT_TABLE_SLICES as S, LATENT_TABLE_VALUE_CELLS,
+    LATENT_TABLE_VALUE_MAX,
+};
 
-/// Node values per side of a slice: `C + 1`.
-pub const NODES: usize = C + 1;
-/// Node values per slice.
-pub const SLICE_LEN: usize = NODES * NODES;
-/// Node values of the whole table, slice after slice, each row-major in `(i, j)`.
-pub const TABLE_LEN: usize = S * SLICE_LEN;
+/// How a blob stores a latent table's nodes, and so its grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TableGrid {
+    /// [`LATENT_TABLE_VALUE_CELLS`] (16) cells per side, each node a value of the blob's
+    /// precision (flag bit 4 alone: blobs written before the coded table).
+    Values,
+    /// [`LATENT_TABLE_CELLS`] (32) cells per side, each node an 8-bit code of its value
+    /// ([`code_value`]; flag bits 4 and 5). What the trainer writes.
+    Codes,
+}
+
+impl TableGrid {
+    /// Cells per side.
+    #[must_use]
+    pub const fn cells(self) -> usize {
+        match self {
+            TableGrid::Values => LATENT_TABLE_VALUE_CELLS,
+            TableGrid::Codes => LATENT_TABLE_CELLS,
+        }
+    }
+
+    /// Nodes per side: `cells + 1`.
+    #[must_use]
+    pub const fn nodes(self) -> usize {
+        self.cells() + 1
+    }
+
+    /// Nodes per slice.
+    #[must_use]
+    pub const fn slice_len(self) -> usize {
+        self.nodes() * self.nodes()
+    }
+
+    /// Nodes of the whole table, slice after slice (slice 0 at normal incidence), each
+    /// row-major in `(i, j)`, `i` along `u_0`: the blob's order.
+    #[must_use]
+    pub const fn node_count(self) -> usize {
+        S * self.slice_len()
+    }
+
+    /// Bytes one node takes in a blob of `precision`.
+    #[must_use]
+    pub const fn node_bytes(self, precision: Precision) -> usize {
+        match self {
+            TableGrid::Values => precision.bytes(),
+            TableGrid::Codes => 1,
+        }
+    }
+}
+
+/// Nodes per side of the finest grid.
+const MAX_NODES: usize = LATENT_TABLE_CELLS + 1;
+
+/// Bytes that hold either grid's nodes: one code per node, or four bytes of f32 per node.
+const STORE_LEN: usize = {
+    let codes = S * MAX_NODES * MAX_NODES;
+    let values = S * (LATENT_TABLE_VALUE_CELLS + 1) * (LATENT_TABLE_VALUE_CELLS + 1) * 4;
+    if codes > values {
+        codes
+    } else {
+        values
+    }
+};
+
+/// The node value code `c` stands for (docs/math.md, (79)): `2^((c - 80) / 16)` as
+/// `LATENT_TABLE_CODE_FRACTIONS[r] * 2^q`, `c - 80 = 16 q + r`, exact; codes are 1 to 255.
+#[must_use]
+pub const fn code_value_f32(code: u8) -> f32 {
+    let steps = LATENT_TABLE_CODE_STEPS as i32;
+    let e = code as i32 - LATENT_TABLE_CODE_ONE as i32;
+    let (q, r) = (e.div_euclid(steps), e.rem_euclid(steps));
+    // 2^q for |q| < 127: the exponent field alone.
+    let scale = f32::from_bits(((127 + q) as u32) << 23);
+    LATENT_TABLE_CODE_FRACTIONS[r as usize] * scale
+}
+
+/// The node value code `c` stands for in a model of `precision`: [`code_value_f32`],
+/// rounded to f16 in an f16 model (as its weights are, so the generated code's parameter
+/// block holds the same value).
+#[must_use]
+pub fn code_value(code: u8, precision: Precision) -> f32 {
+    let v = code_value_f32(code);
+    match precision {
+        Precision::F32 => v,
+        Precision::F16 => half::f16::from_f32(v).to_f32(),
+    }
+}
+
+/// The code nearest to `value` in the logarithm, `round(16 log2 value) + 80`; `None` where
+/// `value` is not positive and finite or that code is outside 1..=255. A code's value (also
+/// rounded to f16) gives its code back.
+#[must_use]
+pub fn encode(value: f32) -> Option<u8> {
+    if !(value > 0.0 && value <= LATENT_TABLE_VALUE_MAX) {
+        return None;
+    }
+    let steps = ln(value) * (f32::from(LATENT_TABLE_CODE_STEPS) / core::f32::consts::LN_2);
+    let code = libm::roundf(steps) + f32::from(LATENT_TABLE_CODE_ONE);
+    if (1.0..=255.0).contains(&code) {
+        Some(code as u8)
+    } else {
+        None
+    }
+}
 
 /// The table's node values (positive and finite in every loaded model).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LatentTable {
-    pub(crate) values: [f32; TABLE_LEN],
+    grid: TableGrid,
+    /// The nodes in blob order: one code per node ([`TableGrid::Codes`]) or the
+    /// little-endian bytes of each node's f32 value ([`TableGrid::Values`]); both fit
+    /// the same bytes, so a model's size does not depend on its grid.
+    store: [u8; STORE_LEN],
+    /// The node value of every code at the model's precision ([`code_value`]).
+    code_values: [f32; 256],
     /// Per slice `k`, the column integrals `M_k[i] = sum_j w_j v_k[i][j]` (trapezoid weights,
-    /// `j` ascending), derived from `values` by [`LatentTable::prepare`]: a call mixes 2 x 17
-    /// of them instead of summing 2 x 289 nodes. The generated code sums them per call in
-    /// the same order, so both hold the same bits.
-    columns: [f32; S * NODES],
+    /// `j` ascending), derived from the nodes by [`LatentTable::prepare`]: a call mixes 2 x
+    /// `(C + 1)` of them instead of summing 2 x `(C + 1)^2` nodes. The generated code sums
+    /// them per call in the same order, so both hold the same bits.
+    columns: [f32; S * MAX_NODES],
 }
 
 /// The two slices a `wi` mixes: `k` and `k + 1`, the second with weight `t`.
@@ -61,11 +171,12 @@ pub fn slice_incidence(s: f64) -> f64 {
 }
 
 /// `0.5` at the grid's two ends, `1` inside: the trapezoid rule's weight of node `i` along
-/// one axis (the bilinear surface's integral is `sum_ij w_i w_j v_ij / C^2`, (74)).
+/// one axis of a grid of `cells` cells (the bilinear surface's integral is
+/// `sum_ij w_i w_j v_ij / C^2`, (74)).
 #[inline(always)]
 #[must_use]
-pub fn trapezoid(i: usize) -> f32 {
-    if i == 0 || i == C {
+pub fn trapezoid(i: usize, cells: usize) -> f32 {
+    if i == 0 || i == cells {
         0.5
     } else {
         1.0
@@ -74,8 +185,8 @@ pub fn trapezoid(i: usize) -> f32 {
 
 /// The cell of `x` in `[0, C]` and the position in it: `(min(floor(x), C - 1), x - cell)`.
 #[inline(always)]
-fn cell(x: f32) -> (usize, f32) {
-    let i = (x.max(0.0) as usize).min(C - 1);
+fn cell(x: f32, cells: usize) -> (usize, f32) {
+    let i = (x.max(0.0) as usize).min(cells - 1);
     (i, x - i as f32)
 }
 
@@ -89,14 +200,15 @@ fn cell_fraction(lo: f32, hi: f32, r: f32) -> f32 {
     (2.0 * r / (lo + sqrt(disc))).clamp(0.0, 1.0)
 }
 
-/// Inverts the CDF of the piecewise-linear density with node values `m` at `u` in
-/// `[0, 1]`: the cell whose cumulative area (the trapezoid rule) first reaches `u` times
-/// the total, then [`cell_fraction`] in it; returns the point in `[0, 1]`.
+/// Inverts the CDF of the piecewise-linear density with node values `m` (the first
+/// `cells + 1`) at `u` in `[0, 1]`: the cell whose cumulative area (the trapezoid rule)
+/// first reaches `u` times the total, then [`cell_fraction`] in it; returns the point in
+/// `[0, 1]`.
 #[inline(always)]
-fn invert_linear(m: &[f32; NODES], total: f32, u: f32) -> f32 {
+fn invert_linear(m: &[f32; MAX_NODES], cells: usize, total: f32, u: f32) -> f32 {
     let mut r = u * total;
     let mut i = 0;
-    while i + 1 < C {
+    while i + 1 < cells {
         let area = 0.5 * (m[i] + m[i + 1]);
         if r <= area {
             break;
@@ -105,26 +217,118 @@ fn invert_linear(m: &[f32; NODES], total: f32, u: f32) -> f32 {
         i += 1;
     }
     let a = cell_fraction(m[i], m[i + 1], r);
-    ((i as f32 + a) / C as f32).clamp(0.0, 1.0)
+    ((i as f32 + a) / cells as f32).clamp(0.0, 1.0)
 }
 
+/// `sum_i w_i m_i` over the first `cells + 1` entries: `C^2` times the integral of the
+/// mixed bilinear surface.
+#[inline(always)]
+fn total(m: &[f32; MAX_NODES], cells: usize) -> f32 {
+    let mut sum = 0.0;
+    for (i, mi) in m.iter().take(cells + 1).enumerate() {
+        sum += trapezoid(i, cells) * mi;
+    }
+    sum
+}
+
+/// Every code's value at `precision`.
+fn code_values(precision: Precision) -> [f32; 256] {
+    let mut values = [1.0; 256];
+    for (c, v) in values.iter_mut().enumerate() {
+        *v = code_value(c as u8, precision);
+    }
+    values
+}
+
+/// [`code_value_f32`] of every code, at compile time.
+const CODE_VALUES_F32: [f32; 256] = {
+    let mut values = [1.0; 256];
+    let mut c = 0;
+    while c < 256 {
+        values[c] = code_value_f32(c as u8);
+        c += 1;
+    }
+    values
+};
+
 impl LatentTable {
-    /// Every node 1: the uniform density, the identity map.
+    /// Every node 1 (code [`LATENT_TABLE_CODE_ONE`]): the uniform density, the identity map.
     pub const UNIFORM: LatentTable = LatentTable {
-        values: [1.0; TABLE_LEN],
-        columns: [C as f32; S * NODES],
+        grid: TableGrid::Codes,
+        store: [LATENT_TABLE_CODE_ONE; STORE_LEN],
+        code_values: CODE_VALUES_F32,
+        columns: [LATENT_TABLE_CELLS as f32; S * MAX_NODES],
     };
 
-    /// Derives the column integrals from the node values; called after every change of
-    /// them.
-    pub(crate) fn prepare(&mut self) {
-        for (k, slice) in self.values.chunks_exact(SLICE_LEN).enumerate() {
-            for (i, row) in slice.chunks_exact(NODES).enumerate() {
-                let mut sum = 0.0;
-                for (j, &v) in row.iter().enumerate() {
-                    sum += trapezoid(j) * v;
+    /// Cells per side.
+    #[inline(always)]
+    fn cells(&self) -> usize {
+        self.grid.cells()
+    }
+
+    /// Node `n` in blob order.
+    #[inline(always)]
+    fn value(&self, n: usize) -> f32 {
+        match self.grid {
+            TableGrid::Codes => self
+                .store
+                .get(n)
+                .map_or(1.0, |&c| self.code_values[usize::from(c)]),
+            TableGrid::Values => self
+                .store
+                .get(4 * n..4 * n + 4)
+                .and_then(|b| b.try_into().ok())
+                .map_or(1.0, f32::from_le_bytes),
+        }
+    }
+
+    /// Whether `value` may be a node of a table on `grid` (checked before [`Self::load`]):
+    /// in `(0, LATENT_TABLE_VALUE_MAX]`, and on the coded grid within the codes' range.
+    #[must_use]
+    pub(crate) fn accepts(grid: TableGrid, value: f32) -> bool {
+        match grid {
+            TableGrid::Values => value > 0.0 && value <= LATENT_TABLE_VALUE_MAX,
+            TableGrid::Codes => encode(value).is_some(),
+        }
+    }
+
+    /// Replaces the nodes by `grid.node_count()` values from `next` (blob order, each accepted by
+    /// [`Self::accepts`]): on the coded grid each is stored as its nearest code, as an f16
+    /// blob rounds a weight to f16. Derives the column integrals.
+    pub(crate) fn load(
+        &mut self,
+        grid: TableGrid,
+        precision: Precision,
+        next: &mut impl FnMut() -> f32,
+    ) {
+        self.grid = grid;
+        self.code_values = code_values(precision);
+        match grid {
+            TableGrid::Codes => {
+                for c in self.store.iter_mut().take(grid.node_count()) {
+                    *c = encode(next()).unwrap_or(LATENT_TABLE_CODE_ONE);
                 }
-                if let Some(c) = self.columns.get_mut(k * NODES + i) {
+            }
+            TableGrid::Values => {
+                for b in self.store.chunks_exact_mut(4).take(grid.node_count()) {
+                    b.copy_from_slice(&next().to_le_bytes());
+                }
+            }
+        }
+        self.prepare();
+    }
+
+    /// Derives the column integrals from the nodes.
+    fn prepare(&mut self) {
+        let (cells, nodes) = (self.cells(), self.grid.nodes());
+        for k in 0..S {
+            for i in 0..nodes {
+                let first = k * self.grid.slice_len() + i * nodes;
+                let mut sum = 0.0;
+                for j in 0..nodes {
+                    sum += trapezoid(j, cells) * self.value(first + j);
+                }
+                if let Some(c) = self.columns.get_mut(k * MAX_NODES + i) {
                     *c = sum;
                 }
             }
@@ -134,36 +338,21 @@ impl LatentTable {
     /// The mixed node value `(1 - t) v_k[i][j] + t v_(k+1)[i][j]` (75).
     #[inline(always)]
     fn node(&self, sl: TableSlice, i: usize, j: usize) -> f32 {
-        let at = |k: usize| {
-            self.values
-                .get(k * SLICE_LEN + i * NODES + j)
-                .copied()
-                .unwrap_or(1.0)
-        };
-        (1.0 - sl.t) * at(sl.k) + sl.t * at(sl.k + 1)
+        let at = sl.k * self.grid.slice_len() + i * self.grid.nodes() + j;
+        (1.0 - sl.t) * self.value(at) + sl.t * self.value(at + self.grid.slice_len())
     }
 
     /// The column integrals of the mixed slice, `m_i = (1 - t) M_k[i] + t M_(k+1)[i]`
     /// (`docs/math.md`, (74), (75)): the marginal density of `u_0` at the nodes, times `C`
     /// over the total.
     #[inline(always)]
-    fn columns(&self, sl: TableSlice) -> [f32; NODES] {
-        let at = |k: usize, i: usize| self.columns.get(k * NODES + i).copied().unwrap_or(1.0);
-        let mut m = [0.0; NODES];
-        for (i, mi) in m.iter_mut().enumerate() {
+    fn columns(&self, sl: TableSlice) -> [f32; MAX_NODES] {
+        let at = |k: usize, i: usize| self.columns.get(k * MAX_NODES + i).copied().unwrap_or(1.0);
+        let mut m = [0.0; MAX_NODES];
+        for (i, mi) in m.iter_mut().take(self.grid.nodes()).enumerate() {
             *mi = (1.0 - sl.t) * at(sl.k, i) + sl.t * at(sl.k + 1, i);
         }
         m
-    }
-
-    /// `sum_i w_i m_i`: `C^2` times the integral of the mixed bilinear surface.
-    #[inline(always)]
-    fn total(m: &[f32; NODES]) -> f32 {
-        let mut sum = 0.0;
-        for (i, mi) in m.iter().enumerate() {
-            sum += trapezoid(i) * mi;
-        }
-        sum
     }
 
     /// The point of `[0, 1]^2` the table draws for the uniform `u` (docs/math.md, (76)):
@@ -172,14 +361,15 @@ impl LatentTable {
     #[inline]
     #[must_use]
     pub(crate) fn warp(&self, sl: TableSlice, u: [f32; 2]) -> [f32; 2] {
+        let cells = self.cells();
         let m = self.columns(sl);
-        let x0 = invert_linear(&m, Self::total(&m), u[0]);
-        let (i, a) = cell(x0 * C as f32);
-        let mut q = [0.0; NODES];
-        for (j, qj) in q.iter_mut().enumerate() {
+        let x0 = invert_linear(&m, cells, total(&m, cells), u[0]);
+        let (i, a) = cell(x0 * cells as f32, cells);
+        let mut q = [0.0; MAX_NODES];
+        for (j, qj) in q.iter_mut().take(cells + 1).enumerate() {
             *qj = (1.0 - a) * self.node(sl, i, j) + a * self.node(sl, i + 1, j);
         }
-        let x1 = invert_linear(&q, Self::total(&q), u[1]);
+        let x1 = invert_linear(&q, cells, total(&q, cells), u[1]);
         [x0, x1]
     }
 
@@ -188,23 +378,19 @@ impl LatentTable {
     #[inline]
     #[must_use]
     pub(crate) fn ln_density(&self, sl: TableSlice, x: [f32; 2]) -> f32 {
+        let cells = self.cells();
         let m = self.columns(sl);
-        let (i, a) = cell(x[0] * C as f32);
-        let (j, b) = cell(x[1] * C as f32);
+        let (i, a) = cell(x[0] * cells as f32, cells);
+        let (j, b) = cell(x[1] * cells as f32, cells);
         let lo = (1.0 - b) * self.node(sl, i, j) + b * self.node(sl, i, j + 1);
         let hi = (1.0 - b) * self.node(sl, i + 1, j) + b * self.node(sl, i + 1, j + 1);
         let bilinear = (1.0 - a) * lo + a * hi;
-        ln(bilinear * (C * C) as f32 / Self::total(&m))
+        ln(bilinear * (cells * cells) as f32 / total(&m, cells))
     }
 
-    /// The node values in blob order.
+    /// The node values in blob order (a code's value at the model's precision).
     pub(crate) fn visit(&self, f: &mut impl FnMut(f32)) {
-        self.values.iter().for_each(|&v| f(v));
-    }
-
-    /// The node values in blob order, to be written.
-    pub(crate) fn visit_mut(&mut self, f: &mut impl FnMut(&mut f32)) {
-        self.values.iter_mut().for_each(f);
+        (0..self.grid.node_count()).for_each(|n| f(self.value(n)));
     }
 }
 
@@ -212,22 +398,23 @@ impl LatentTable {
 mod tests {
     use super::*;
 
-    /// A table whose slices differ: node values from a smooth positive function of
+    /// A table on `grid` whose slices differ: node values from a smooth positive function of
     /// `(k, i, j)` with a 20x range.
-    fn bumpy() -> LatentTable {
+    fn bumpy(grid: TableGrid) -> LatentTable {
+        let (c, nodes) = (grid.cells(), grid.nodes());
+        let mut n = 0;
+        let mut next = || {
+            let (k, i, j) = (n / grid.slice_len(), (n / nodes) % nodes, n % nodes);
+            n += 1;
+            let (x, y) = (i as f32 / c as f32, j as f32 / c as f32);
+            0.05 + (x - 0.3 - 0.01 * k as f32).powi(2) * 4.0 + y * y * (1.0 - x)
+        };
         let mut t = LatentTable::UNIFORM;
-        for k in 0..S {
-            for i in 0..NODES {
-                for j in 0..NODES {
-                    let (x, y) = (i as f32 / C as f32, j as f32 / C as f32);
-                    let v = 0.05 + (x - 0.3 - 0.01 * k as f32).powi(2) * 4.0 + y * y * (1.0 - x);
-                    t.values[k * SLICE_LEN + i * NODES + j] = v;
-                }
-            }
-        }
-        t.prepare();
+        t.load(grid, Precision::F32, &mut next);
         t
     }
+
+    const GRIDS: [TableGrid; 2] = [TableGrid::Codes, TableGrid::Values];
 
     fn density(t: &LatentTable, sl: TableSlice, x: [f32; 2]) -> f64 {
         f64::from(t.ln_density(sl, x)).exp()
@@ -235,43 +422,51 @@ mod tests {
 
     #[test]
     fn the_density_integrates_to_one() {
-        let t = bumpy();
-        for wi_z in [1.0, 0.7, 0.2, 0.013, 0.0] {
-            let sl = TableSlice::of(wi_z);
-            let n = 400;
-            let mut sum = 0.0;
-            for a in 0..n {
-                for b in 0..n {
-                    let x = [(a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32];
-                    sum += density(&t, sl, x);
+        for grid in GRIDS {
+            let t = bumpy(grid);
+            for wi_z in [1.0, 0.7, 0.2, 0.013, 0.0] {
+                let sl = TableSlice::of(wi_z);
+                let n = 400;
+                let mut sum = 0.0;
+                for a in 0..n {
+                    for b in 0..n {
+                        let x = [(a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32];
+                        sum += density(&t, sl, x);
+                    }
                 }
+                let integral = sum / f64::from(n * n);
+                assert!(
+                    (integral - 1.0).abs() < 1e-4,
+                    "{grid:?} wi.z {wi_z}: {integral}"
+                );
             }
-            let integral = sum / f64::from(n * n);
-            assert!((integral - 1.0).abs() < 1e-4, "wi.z {wi_z}: {integral}");
         }
     }
 
     #[test]
     fn the_warp_is_increasing_and_its_jacobian_is_the_density() {
-        let t = bumpy();
-        let sl = TableSlice::of(0.4);
-        let h = 1e-3f32;
-        for a in 1..40 {
-            for b in 1..40 {
-                let u = [a as f32 / 40.0, b as f32 / 40.0];
-                let x = t.warp(sl, u);
-                let x0p = t.warp(sl, [u[0] + h, u[1]]);
-                let x1p = t.warp(sl, [u[0], u[1] + h]);
-                // The map is triangular: u_1 moves only x_1, and both move forwards.
-                assert_eq!(x1p[0], x[0]);
-                assert!(x0p[0] > x[0] && x1p[1] > x[1], "not increasing at {u:?}");
-                // det = dx0/du0 dx1/du1 = 1 / density (the second column's x_0 part is 0).
-                let det = f64::from(x0p[0] - x[0]) * f64::from(x1p[1] - x[1]) / f64::from(h * h);
-                let want = 1.0 / density(&t, sl, x);
-                assert!(
-                    (det / want - 1.0).abs() < 0.02,
-                    "u {u:?}: det {det} vs {want}"
-                );
+        for grid in GRIDS {
+            let t = bumpy(grid);
+            let sl = TableSlice::of(0.4);
+            let h = 1e-3f32;
+            for a in 1..40 {
+                for b in 1..40 {
+                    let u = [a as f32 / 40.0, b as f32 / 40.0];
+                    let x = t.warp(sl, u);
+                    let x0p = t.warp(sl, [u[0] + h, u[1]]);
+                    let x1p = t.warp(sl, [u[0], u[1] + h]);
+                    // The map is triangular: u_1 moves only x_1, and both move forwards.
+                    assert_eq!(x1p[0], x[0]);
+                    assert!(x0p[0] > x[0] && x1p[1] > x[1], "not increasing at {u:?}");
+                    // det = dx0/du0 dx1/du1 = 1 / density (the second column's x_0 part is 0).
+                    let det =
+                        f64::from(x0p[0] - x[0]) * f64::from(x1p[1] - x[1]) / f64::from(h * h);
+                    let want = 1.0 / density(&t, sl, x);
+                    assert!(
+                        (det / want - 1.0).abs() < 0.03,
+                        "{grid:?} u {u:?}: det {det} vs {want}"
+                    );
+                }
             }
         }
     }
@@ -300,10 +495,53 @@ mod tests {
 
     #[test]
     fn the_edges_of_the_square_map_to_its_edges() {
-        let t = bumpy();
-        let sl = TableSlice::of(0.1);
-        assert_eq!(t.warp(sl, [0.0, 0.0]), [0.0, 0.0]);
-        let x = t.warp(sl, [1.0, 1.0]);
-        assert!(x[0] > 0.99999 && x[1] > 0.99999, "{x:?}");
+        for grid in GRIDS {
+            let t = bumpy(grid);
+            let sl = TableSlice::of(0.1);
+            assert_eq!(t.warp(sl, [0.0, 0.0]), [0.0, 0.0]);
+            let x = t.warp(sl, [1.0, 1.0]);
+            assert!(x[0] > 0.99999 && x[1] > 0.99999, "{x:?}");
+        }
+    }
+
+    /// Every code's value, also rounded to f16, gives its code back; values between two
+    /// codes go to the nearer one in the logarithm; the range ends are refused.
+    #[test]
+    fn codes_round_trip_and_refuse_what_they_cannot_hold() {
+        for c in 1..=255u8 {
+            assert_eq!(encode(code_value(c, Precision::F32)), Some(c));
+            assert_eq!(encode(code_value(c, Precision::F16)), Some(c));
+            let exact = libm::exp2((f64::from(c) - 80.0) / 16.0);
+            assert_eq!(code_value_f32(c), exact as f32, "code {c}");
+        }
+        assert_eq!(code_value_f32(LATENT_TABLE_CODE_ONE), 1.0);
+        let between = libm::exp2f(0.4 / 16.0);
+        assert_eq!(encode(between), Some(LATENT_TABLE_CODE_ONE));
+        assert_eq!(
+            encode(libm::exp2f(0.6 / 16.0)),
+            Some(LATENT_TABLE_CODE_ONE + 1)
+        );
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY, 1e-3, 3000.0] {
+            assert_eq!(encode(bad), None, "{bad}");
+        }
+    }
+
+    /// Loading the values a table reads back stores the same table.
+    #[test]
+    fn a_table_reloads_from_its_own_values() {
+        for grid in GRIDS {
+            let t = bumpy(grid);
+            let mut values = [0.0f32; STORE_LEN];
+            let mut n = 0;
+            t.visit(&mut |v| {
+                values[n] = v;
+                n += 1;
+            });
+            assert_eq!(n, grid.node_count());
+            let mut again = LatentTable::UNIFORM;
+            let mut it = values.iter();
+            again.load(grid, Precision::F32, &mut || *it.next().unwrap());
+            assert_eq!(again, t);
+        }
     }
 }

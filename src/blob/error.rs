@@ -52,7 +52,9 @@ pub enum BlobError {
         /// Position of the weight in blob order.
         index: usize,
     },
-    /// A node value of the latent table is not in `(0, spec::LATENT_TABLE_VALUE_MAX]`.
+    /// A node of the latent table is not one its grid may hold: a value not in `(0,
+    /// spec::LATENT_TABLE_VALUE_MAX]`, or on the coded grid code 0 or a value whose
+    /// nearest code is outside 1..=255 (`docs/math.md`, (79)).
     TableValueOutOfRange {
         /// Position of the value in blob order.
         index: usize,
@@ -100,7 +102,8 @@ impl fmt::Display for BlobError {
             BlobError::NonFiniteWeight { index } => write!(f, "weight {index} is not finite"),
             BlobError::TableValueOutOfRange { index } => write!(
                 f,
-                "latent table value {index} is not in (0, {}]",
+                "latent table node {index} is out of range: a value not in (0, {}], or a code \
+                 outside 1..=255",
                 crate::spec::LATENT_TABLE_VALUE_MAX
             ),
             BlobError::ShapeMismatch => {

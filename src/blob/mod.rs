@@ -14,6 +14,7 @@ pub use error::BlobError;
 pub(crate) use writer::write_blob_with;
 pub use writer::{blob_len, write_blob};
 
+use crate::base::table::{code_value, LatentTable, TableGrid};
 use crate::def::{
     Activation, Domain, IncidentRange, ModelDef, ModelName, NetShape, Precision, NAME_CAPACITY,
 };
@@ -55,10 +56,12 @@ impl<'a> Blob<'a> {
         let raw = RawHeader::read(&mut cur).ok_or(truncated)?;
         let precision = Precision::from_code(raw.precision)
             .ok_or(BlobError::UnknownPrecision(raw.precision))?;
-        let total = (raw.param_count as usize)
-            .checked_mul(precision.bytes())
-            .and_then(|w| w.checked_add(HEADER_LEN + CHECKSUM_LEN))
-            .ok_or(BlobError::BadHeader("parameter count overflows"))?;
+        let grid = raw.table_grid()?;
+        let total = body_len(raw.param_count as usize, precision, grid)
+            .and_then(|body| body.checked_add(HEADER_LEN + CHECKSUM_LEN))
+            .ok_or(BlobError::BadHeader(
+                "parameter count overflows or is below the latent table's",
+            ))?;
         if bytes.len() < total {
             return Err(BlobError::Truncated {
                 needed: total,
@@ -84,34 +87,77 @@ impl<'a> Blob<'a> {
         Ok(blob)
     }
 
-    /// The stored weights in blob order, decoded to f32.
+    /// The stored parameters in blob order, decoded to f32: the nets' weights, then the
+    /// latent table's nodes (a code's value at the blob's precision, [`code_value`]).
     pub fn weights(&self) -> impl Iterator<Item = f32> + 'a {
         let precision = self.def.precision;
-        self.weights
+        let grid = self.def.latent_table;
+        let table_len = self.def.table_len();
+        let split = (self.def.param_count() - table_len) * precision.bytes();
+        let (nets, table) = self.weights.split_at(split.min(self.weights.len()));
+        let node_bytes = grid.map_or(1, |g| g.node_bytes(precision));
+        let nets = nets
             .chunks_exact(precision.bytes())
-            .map(move |c| match precision {
-                Precision::F32 => f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
-                Precision::F16 => half::f16::from_bits(u16::from_le_bytes([c[0], c[1]])).to_f32(),
-            })
+            .map(move |c| decode(c, precision));
+        let table = table.chunks_exact(node_bytes).map(move |c| match grid {
+            Some(TableGrid::Codes) => code_value(c[0], precision),
+            _ => decode(c, precision),
+        });
+        nets.chain(table)
     }
 
     fn check_values(&self) -> Result<(), BlobError> {
         let first_table = self.def.param_count() - self.def.table_len();
-        check_params(self.weights(), first_table)
+        if self.def.latent_table == Some(TableGrid::Codes) {
+            // Code 0 stands for no value (docs/blob-format.md).
+            let codes = self.weights.get(first_table * self.def.precision.bytes()..);
+            if let Some(at) = codes.and_then(|c| c.iter().position(|&c| c == 0)) {
+                return Err(BlobError::TableValueOutOfRange {
+                    index: first_table + at,
+                });
+            }
+        }
+        check_params(self.weights(), first_table, self.def.latent_table)
     }
 }
 
-/// Every parameter finite, every latent-table value (from index `first_table` on) in
-/// `(0, spec::LATENT_TABLE_VALUE_MAX]`.
+/// One stored weight of `precision` (`c` holds its bytes).
+fn decode(c: &[u8], precision: Precision) -> f32 {
+    match precision {
+        Precision::F32 => f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+        Precision::F16 => half::f16::from_bits(u16::from_le_bytes([c[0], c[1]])).to_f32(),
+    }
+}
+
+/// Bytes of the parameters of a blob with `param_count` parameters (latent-table nodes
+/// included) of `precision` and a table on `grid`; `None` on overflow or a count below the
+/// table's.
+pub(crate) fn body_len(
+    param_count: usize,
+    precision: Precision,
+    grid: Option<TableGrid>,
+) -> Option<usize> {
+    let table = grid.map_or(0, TableGrid::node_count);
+    let nets = param_count
+        .checked_sub(table)?
+        .checked_mul(precision.bytes())?;
+    let node_bytes = grid.map_or(0, |g| g.node_bytes(precision));
+    nets.checked_add(table * node_bytes)
+}
+
+/// Every parameter finite, every latent-table node (from index `first_table` on) one a
+/// table on `grid` may hold ([`LatentTable::accepts`]).
 pub(crate) fn check_params(
     params: impl Iterator<Item = f32>,
     first_table: usize,
+    grid: Option<TableGrid>,
 ) -> Result<(), BlobError> {
     for (index, w) in params.enumerate() {
         if !w.is_finite() {
             return Err(BlobError::NonFiniteWeight { index });
         }
-        if index >= first_table && !(w > 0.0 && w <= crate::spec::LATENT_TABLE_VALUE_MAX) {
+        let in_table = grid.filter(|_| index >= first_table);
+        if in_table.is_some_and(|g| !LatentTable::accepts(g, w)) {
             return Err(BlobError::TableValueOutOfRange { index });
         }
     }
@@ -159,6 +205,21 @@ impl RawHeader {
         })
     }
 
+    /// The latent table's grid from flag bits 4 and 5 (bit 5 without bit 4 is an error).
+    fn table_grid(&self) -> Result<Option<TableGrid>, BlobError> {
+        match (
+            self.flags & FLAG_LATENT_TABLE != 0,
+            self.flags & FLAG_CODED_TABLE != 0,
+        ) {
+            (false, false) => Ok(None),
+            (true, false) => Ok(Some(TableGrid::Values)),
+            (true, true) => Ok(Some(TableGrid::Codes)),
+            (false, true) => Err(BlobError::BadHeader(
+                "a coded latent table without a latent table",
+            )),
+        }
+    }
+
     fn into_def(self, precision: Precision) -> Result<ModelDef, BlobError> {
         let domain = Domain::from_code(self.domain).ok_or(BlobError::UnknownDomain(self.domain))?;
         let activation = Activation::from_code(self.activation)
@@ -167,7 +228,8 @@ impl RawHeader {
             | FLAG_UPPER_HEMISPHERE
             | FLAG_STANDARDIZED
             | FLAG_STANDARD_WARP
-            | FLAG_LATENT_TABLE;
+            | FLAG_LATENT_TABLE
+            | FLAG_CODED_TABLE;
         if self.flags & !known != 0 {
             return Err(BlobError::BadHeader("unknown flag bits are set"));
         }
@@ -183,8 +245,8 @@ impl RawHeader {
                 "warped standard coordinates without standard coordinates",
             ));
         }
-        let latent_table = self.flags & FLAG_LATENT_TABLE != 0;
-        if latent_table && !standardized {
+        let latent_table = self.table_grid()?;
+        if latent_table.is_some() && !standardized {
             return Err(BlobError::BadHeader(
                 "a latent table without standard coordinates",
             ));
@@ -249,6 +311,10 @@ pub(crate) const FLAG_STANDARD_WARP: u32 = 8;
 /// Header flag: the blob stores a latent table after the nets' weights
 /// ([`ModelDef::latent_table`]; only with [`FLAG_STANDARDIZED`]).
 pub(crate) const FLAG_LATENT_TABLE: u32 = 16;
+/// Header flag: the latent table has [`crate::spec::LATENT_TABLE_CELLS`] cells per side and
+/// stores each node as an 8-bit code ([`TableGrid::Codes`]; only with
+/// [`FLAG_LATENT_TABLE`]).
+pub(crate) const FLAG_CODED_TABLE: u32 = 32;
 /// Header flag: the model is defined for `wi` above the surface only
 /// ([`IncidentRange::UpperHemisphere`]); implied on the disk, written there too.
 pub(crate) const FLAG_UPPER_HEMISPHERE: u32 = 2;

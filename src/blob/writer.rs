@@ -1,19 +1,23 @@
 //! Writes a blob into a caller's buffer (no allocation, so it works in `no_std` too).
 
 use super::{
-    crc32, BlobError, CHECKSUM_LEN, FLAG_ISOTROPIC, FLAG_LATENT_TABLE, FLAG_STANDARDIZED,
-    FLAG_STANDARD_WARP, FLAG_UPPER_HEMISPHERE, HEADER_LEN, MAGIC, VERSION,
+    body_len, crc32, BlobError, CHECKSUM_LEN, FLAG_CODED_TABLE, FLAG_ISOTROPIC, FLAG_LATENT_TABLE,
+    FLAG_STANDARDIZED, FLAG_STANDARD_WARP, FLAG_UPPER_HEMISPHERE, HEADER_LEN, MAGIC, VERSION,
 };
+use crate::base::table::{encode, TableGrid};
 use crate::def::IncidentRange;
 use crate::def::{ModelDef, NetShape, Precision, NAME_CAPACITY};
 
-/// Bytes of the blob for `def`.
-pub const fn blob_len(def: &ModelDef) -> usize {
-    HEADER_LEN + def.param_count() * def.precision.bytes() + CHECKSUM_LEN
+/// Bytes of the blob for `def`: the header, the nets' weights at `def.precision`, the
+/// latent table's nodes (one byte each on [`TableGrid::Codes`]) and the checksum.
+pub fn blob_len(def: &ModelDef) -> usize {
+    let body = body_len(def.param_count(), def.precision, def.latent_table).unwrap_or(0);
+    HEADER_LEN + body + CHECKSUM_LEN
 }
 
 /// Writes `def` and `params` (blob order, see `docs/blob-format.md`) into `out`, rounding
-/// to f16 when `def.precision` says so. Returns the number of bytes written.
+/// to f16 when `def.precision` says so and a coded latent table's nodes to their nearest
+/// code. Returns the number of bytes written.
 ///
 /// Fails if `params` does not hold exactly `def.param_count()` finite values, or `out` is
 /// too small.
@@ -52,6 +56,8 @@ pub(crate) fn write_blob_with(
         .get_mut(..len - HEADER_LEN - CHECKSUM_LEN)
         .ok_or(BlobError::BufferTooSmall { needed: len, got })?;
     let precision = def.precision;
+    let first_table = count - def.table_len();
+    let coded = def.latent_table == Some(TableGrid::Codes);
     let mut index = 0usize;
     let mut error = None;
     visit(&mut |w: f32| {
@@ -60,29 +66,41 @@ pub(crate) fn write_blob_with(
         }
         let at = index;
         index += 1;
-        let dst = body.get_mut(at * precision.bytes()..(at + 1) * precision.bytes());
-        let (Some(dst), true) = (dst, w.is_finite()) else {
-            error = Some(if at >= count {
-                BlobError::ParamCountMismatch {
+        error = if at >= count {
+            Some(BlobError::ParamCountMismatch {
+                declared: index as u32,
+                from_shape: count,
+            })
+        } else if !w.is_finite() {
+            Some(BlobError::NonFiniteWeight { index: at })
+        } else if coded && at >= first_table {
+            let code = encode(w).ok_or(BlobError::TableValueOutOfRange { index: at });
+            let dst = body.get_mut(first_table * precision.bytes() + (at - first_table));
+            code.and_then(|c| {
+                dst.map(|d| *d = c).ok_or(BlobError::ParamCountMismatch {
                     declared: index as u32,
                     from_shape: count,
+                })
+            })
+            .err()
+        } else {
+            let dst = body.get_mut(at * precision.bytes()..(at + 1) * precision.bytes());
+            match (dst, precision) {
+                (Some(dst), Precision::F32) => {
+                    dst.copy_from_slice(&w.to_le_bytes());
+                    None
                 }
-            } else {
-                BlobError::NonFiniteWeight { index: at }
-            });
-            return;
-        };
-        match precision {
-            Precision::F32 => dst.copy_from_slice(&w.to_le_bytes()),
-            Precision::F16 => {
-                let h = half::f16::from_f32(w);
-                if h.is_finite() {
+                (Some(dst), Precision::F16) => {
+                    let h = half::f16::from_f32(w);
                     dst.copy_from_slice(&h.to_bits().to_le_bytes());
-                } else {
-                    error = Some(BlobError::NonFiniteWeight { index: at });
+                    (!h.is_finite()).then_some(BlobError::NonFiniteWeight { index: at })
                 }
+                (None, _) => Some(BlobError::ParamCountMismatch {
+                    declared: index as u32,
+                    from_shape: count,
+                }),
             }
-        }
+        };
     });
     if let Some(e) = error {
         return Err(e);
@@ -121,8 +139,11 @@ fn write_header(def: &ModelDef, h: &mut [u8]) {
     if def.standard_warp {
         flags |= FLAG_STANDARD_WARP;
     }
-    if def.latent_table {
+    if let Some(grid) = def.latent_table {
         flags |= FLAG_LATENT_TABLE;
+        if grid == TableGrid::Codes {
+            flags |= FLAG_CODED_TABLE;
+        }
     }
     h[28..32].copy_from_slice(&flags.to_le_bytes());
     h[32..32 + def.name.as_bytes().len()].copy_from_slice(def.name.as_bytes());

@@ -62,7 +62,7 @@ impl<
     /// coordinates, or its compression (63) in warped ones.
     #[inline(always)]
     pub(crate) fn flow_start(&self, c: &Conditioned<VW>, u: [f32; 2]) -> [f32; 2] {
-        if self.def.latent_table {
+        if self.def.latent_table.is_some() {
             // u drawn through the latent table first (docs/math.md, (76)).
             BaseDist::standard_start(self.table.warp(c.slice, u), self.def.standard_warp)
         } else if self.def.standardized {
@@ -90,7 +90,7 @@ impl<
     /// 1]^2` the standard start `z0` was drawn from (docs/math.md, (77)); 0 without a table.
     #[inline(always)]
     fn table_ln_density(&self, c: &Conditioned<VW>, z0: [f32; 2]) -> f32 {
-        if self.def.latent_table {
+        if self.def.latent_table.is_some() {
             let x = [gaussian::cdf(z0[0]), gaussian::cdf(z0[1])];
             self.table.ln_density(c.slice, x)
         } else {

@@ -20,7 +20,7 @@ fn the_table_lowers_the_measured_variance_and_stays_exact() {
     let flow = fit_material(material.as_ref(), "table", &cfg, &Silent)
         .unwrap()
         .model;
-    assert!(!flow.def().latent_table);
+    assert_eq!(flow.def().latent_table, None);
     let table_cfg = TableConfig {
         draws_per_slice: 20_000,
         ..TableConfig::DEFAULT
@@ -33,7 +33,7 @@ fn the_table_lowers_the_measured_variance_and_stays_exact() {
         fit.rv_flow,
         fit.rv_table
     );
-    assert!(tabled.def().latent_table);
+    assert_eq!(tabled.def().latent_table, Some(diffbsdf::TableGrid::Codes));
 
     // Through the blob and back, and without the table again.
     let bytes = tabled.blob(Precision::F32).unwrap();

@@ -173,7 +173,7 @@ pub struct FitArgs {
     pub refine_iters: Option<usize>,
     /// Draws per incidence slice of the latent table fitted last, in front of the final
     /// flow (docs/math.md section 6.5): 0 skips it (the fits before 2026-12-06). Default:
-    /// 300 000 with the standard recipe in standard coordinates (the half-vector chart),
+    /// 1 000 000 with the standard recipe in standard coordinates (the half-vector chart),
     /// 0 otherwise.
     #[arg(long)]
     pub table_draws: Option<usize>,

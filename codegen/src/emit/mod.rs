@@ -314,10 +314,7 @@ impl<'a> Emitter<'a> {
                     .into(),
             );
             let f = [
-                (
-                    T::Arr(Box::new(T::F), diffbsdf::internals::base::table::NODES),
-                    "m",
-                ),
+                (T::Arr(Box::new(T::F), self.table_nodes()), "m"),
                 (T::F, "tot"),
             ];
             lines.extend(self.d.struct_decl(&self.p("Cols"), &f));

@@ -5,13 +5,33 @@
 
 use super::Emitter;
 use crate::dialect::{Math, T};
-use diffbsdf::internals::base::table::{NODES, SLICE_LEN};
-use diffbsdf::spec::{ERFC_POLY, LATENT_TABLE_CELLS as C, LATENT_TABLE_SLICES as S};
+use diffbsdf::spec::{ERFC_POLY, LATENT_TABLE_SLICES as S};
+use diffbsdf::TableGrid;
 
 impl Emitter<'_> {
     /// Whether the model draws `u` through a latent table.
     pub(super) fn table(&self) -> bool {
-        self.m.def.latent_table
+        self.m.def.latent_table.is_some()
+    }
+
+    /// The table's grid (the coded one where the model has none: nothing is emitted then).
+    fn table_grid(&self) -> TableGrid {
+        self.m.def.latent_table.unwrap_or(TableGrid::Codes)
+    }
+
+    /// Cells per side of the table's grid.
+    fn table_cells(&self) -> usize {
+        self.table_grid().cells()
+    }
+
+    /// Nodes per side of the table's grid.
+    pub(super) fn table_nodes(&self) -> usize {
+        self.table_grid().nodes()
+    }
+
+    /// Nodes per slice.
+    fn table_slice_len(&self) -> usize {
+        self.table_grid().slice_len()
     }
 
     /// The table's first node value in the parameter block (after the nets' weights).
@@ -73,15 +93,14 @@ impl Emitter<'_> {
             .line("// A node of the latent table, mixed between the wi's two slices (docs/math.md, (75)).");
         let ps = [(self.st("Cond"), "cond"), (T::U, "i"), (T::U, "j")];
         self.fn_open(T::F, "table_node", true, &ps);
+        let (slice_len, nodes) = (self.table_slice_len(), self.table_nodes());
         let at = format!(
-            "{}u + cond.tk * {}u + i * {}u + j",
+            "{}u + cond.tk * {slice_len}u + i * {nodes}u + j",
             self.table_offset(),
-            SLICE_LEN,
-            NODES
         );
         self.decl(T::U, "at", &at);
         let lo = self.d.to_f32(&self.w("at".into()));
-        let hi = self.d.to_f32(&self.w(format!("at + {SLICE_LEN}u")));
+        let hi = self.d.to_f32(&self.w(format!("at + {slice_len}u")));
         let one = self.f(1.0);
         self.code
             .line(format!("return ({one} - cond.tt) * {lo} + cond.tt * {hi};"));
@@ -127,19 +146,20 @@ impl Emitter<'_> {
         let r = self.d.decl(&cols_t, "r", None);
         self.code.line(r);
         let arr = "r.m";
-        self.for_open("ci", &self.u(NODES));
+        let (slice_len, nodes) = (self.table_slice_len(), self.table_nodes());
+        self.for_open("ci", &self.u(nodes));
         let (zero, one) = (self.f(0.0), self.f(1.0));
         self.decl(T::F, "sa", &zero);
         self.decl(T::F, "sb", &zero);
-        self.for_open("cj", &self.u(NODES));
+        self.for_open("cj", &self.u(nodes));
         self.trapezoid("cj");
         let at = format!(
-            "{}u + cond.tk * {SLICE_LEN}u + ci * {NODES}u + cj",
+            "{}u + cond.tk * {slice_len}u + ci * {nodes}u + cj",
             self.table_offset()
         );
         self.decl(T::U, "at", &at);
         let va = self.d.to_f32(&self.w("at".into()));
-        let vb = self.d.to_f32(&self.w(format!("at + {SLICE_LEN}u")));
+        let vb = self.d.to_f32(&self.w(format!("at + {slice_len}u")));
         self.code.line(format!("sa = sa + tw * {va};"));
         self.code.line(format!("sb = sb + tw * {vb};"));
         self.code.close("}");
@@ -162,7 +182,7 @@ impl Emitter<'_> {
     /// `tot = sum_i w_i arr[i]`.
     fn table_total(&mut self, arr: &str, tot: &str) {
         self.decl(T::F, tot, &self.f(0.0));
-        self.for_open("ti", &self.u(NODES));
+        self.for_open("ti", &self.u(self.table_nodes()));
         self.trapezoid("ti");
         self.code.line(format!("{tot} = {tot} + tw * {arr}[ti];"));
         self.code.close("}");
@@ -171,8 +191,10 @@ impl Emitter<'_> {
     /// `tw`: the trapezoid weight of node `i` (0.5 at the ends, 1 inside).
     fn trapezoid(&mut self, i: &str) {
         self.decl(T::F, "tw", &self.f(1.0));
-        self.code
-            .open(format!("if ({i} == 0u || {i} == {}) {{", self.u(C)));
+        self.code.open(format!(
+            "if ({i} == 0u || {i} == {}) {{",
+            self.u(self.table_cells())
+        ));
         self.code.line(format!("tw = {};", self.f(0.5)));
         self.code.close("}");
     }
@@ -182,7 +204,7 @@ impl Emitter<'_> {
     fn table_invert(&mut self, arr: &str, tot: &str, u: &str, out: &str) {
         self.decl(T::F, "rem", &format!("{u} * {tot}"));
         self.decl(T::U, "cell", &self.u(0));
-        self.for_open("n", &self.u(C - 1));
+        self.for_open("n", &self.u(self.table_cells() - 1));
         let half = self.f(0.5);
         self.decl(
             T::F,
@@ -203,7 +225,7 @@ impl Emitter<'_> {
         let pos = format!(
             "({} + {frac}) / {}",
             self.d.cast(&T::F, "cell"),
-            self.f(C as f32)
+            self.f(self.table_cells() as f32)
         );
         let (zero, one) = (self.f(0.0), self.f(1.0));
         self.decl(T::F, out, &self.d.clamp(&pos, &zero, &one));
@@ -214,7 +236,7 @@ impl Emitter<'_> {
         let mx = self.d.math(Math::Max);
         let cx = self.d.cast(&T::U, &format!("{mx}({x}, {})", self.f(0.0)));
         self.decl(T::U, i, &cx);
-        let last = self.u(C - 1);
+        let last = self.u(self.table_cells() - 1);
         self.code.open(format!("if ({i} > {last}) {{"));
         self.code.line(format!("{i} = {last};"));
         self.code.close("}");
@@ -231,11 +253,12 @@ impl Emitter<'_> {
         self.fn_open(vec_t.clone(), "table_warp", true, &ps);
         self.table_columns_call();
         self.table_invert("cm.m", "cm.tot", "u0", "x0");
-        let c = self.f(C as f32);
+        let c = self.f(self.table_cells() as f32);
         self.table_cell(&format!("x0 * {c}"), "i", "a");
-        self.arr(T::F, NODES, "cq");
+        let nodes = self.table_nodes();
+        self.arr(T::F, nodes, "cq");
         let one = self.f(1.0);
-        self.for_open("qj", &self.u(NODES));
+        self.for_open("qj", &self.u(nodes));
         let lo = self.call("table_node", true, &["cond", "i", "qj"]);
         let hi = self.call("table_node", true, &["cond", "i + 1u", "qj"]);
         self.code
@@ -261,7 +284,8 @@ impl Emitter<'_> {
         let ps = [(self.st("Cond"), "cond"), (T::F, "x0"), (T::F, "x1")];
         self.fn_open(T::F, "table_ln_density", true, &ps);
         self.table_columns_call();
-        let c = self.f(C as f32);
+        let cells = self.table_cells();
+        let c = self.f(cells as f32);
         self.table_cell(&format!("x0 * {c}"), "i", "a");
         self.table_cell(&format!("x1 * {c}"), "j", "b");
         let one = self.f(1.0);
@@ -281,7 +305,7 @@ impl Emitter<'_> {
         self.decl(T::F, "bil", &format!("({one} - a) * lo + a * hi"));
         let ln = self.math(
             Math::Log,
-            &format!("bil * {} / cm.tot", self.f((C * C) as f32)),
+            &format!("bil * {} / cm.tot", self.f((cells * cells) as f32)),
         );
         self.code.line(format!("return {ln};"));
         self.end_fn();

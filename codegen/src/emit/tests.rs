@@ -4,17 +4,16 @@
 
 use crate::desc::tests::blob;
 use crate::{generate, Float, Language, Options};
-use diffbsdf::internals::base::table::{NODES, SLICE_LEN};
 use diffbsdf::spec::ERFC_POLY;
 use diffbsdf::spec::{
     BASE_OUTPUTS, DET_REUSE_TOL, DET_SECANT_TOL, ENCODING_PER_FREQ, ENCODING_RAW, ERFINV_BRANCH_W,
     ERFINV_CENTRAL, ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT, EXP_ARG_LIMIT_F16,
     EXP_ARG_MAX, EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LATENT_TABLE_CELLS, LATENT_TABLE_SLICES,
-    LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI, LN_SCALE_MAX, LN_SCALE_MIN, NEWTON_MAX_ITERS,
-    NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO, STANDARD_WARP_K, UNIT_TOLERANCE,
-    VELOCITY_OUTPUTS,
+    LATENT_TABLE_VALUE_CELLS, LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI, LN_SCALE_MAX,
+    LN_SCALE_MIN, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO,
+    STANDARD_WARP_K, UNIT_TOLERANCE, VELOCITY_OUTPUTS,
 };
-use diffbsdf::{Domain, ModelDef};
+use diffbsdf::{Domain, ModelDef, TableGrid};
 
 /// One generated output: what it is, and its text.
 struct Output {
@@ -25,7 +24,8 @@ struct Output {
 }
 
 /// Every language and precision, for an isotropic disk model, a sphere model, a
-/// half-vector model in warped standard coordinates and the same with a latent table.
+/// half-vector model in warped standard coordinates and the same with a latent table of
+/// each grid.
 fn outputs() -> Vec<Output> {
     let mut disk = ModelDef::paper_disk();
     disk.isotropic = true;
@@ -36,9 +36,11 @@ fn outputs() -> Vec<Output> {
     warped.standardized = true;
     warped.standard_warp = true;
     let mut table = warped;
-    table.latent_table = true;
+    table.latent_table = Some(TableGrid::Codes);
+    let mut value_table = warped;
+    value_table.latent_table = Some(TableGrid::Values);
     let mut out = Vec::new();
-    for def in [disk, sphere, warped, table] {
+    for def in [disk, sphere, warped, table, value_table] {
         let bytes = blob(&def);
         for language in [Language::Glsl, Language::Wgsl, Language::C] {
             for float in [Float::F32, Float::F16] {
@@ -52,7 +54,11 @@ fn outputs() -> Vec<Output> {
                     label: format!(
                         "{:?}{} {language:?} {float:?}",
                         def.domain,
-                        if def.latent_table { " table" } else { "" }
+                        match def.latent_table {
+                            Some(TableGrid::Codes) => " table",
+                            Some(TableGrid::Values) => " value table",
+                            None => "",
+                        }
                     ),
                     def,
                     half: float == Float::F16,
@@ -197,8 +203,8 @@ fn warp_scale_is_the_kernels() {
         .into_iter()
         .filter(|o| o.def.standard_warp)
         .collect();
-    // The warped model and the one with a latent table, in five outputs each.
-    assert_eq!(warped.len(), 10);
+    // The warped model and the two with a latent table, in five outputs each.
+    assert_eq!(warped.len(), 15);
     for o in warped {
         // The first line of each is `a = |z| / K`, `s = y / K` or `a = |y| / K`.
         for name in ["warp_compress", "warp_expand", "warp_ln_expansion"] {
@@ -278,8 +284,15 @@ fn newton_constants_are_the_kernels() {
 #[test]
 fn latent_table_layout_and_cdf_are_the_kernels() {
     let mut seen = 0;
-    for o in outputs().iter().filter(|o| o.def.latent_table) {
+    for o in outputs().iter() {
+        let Some(grid) = o.def.latent_table else {
+            continue;
+        };
         seen += 1;
+        let want_cells = match grid {
+            TableGrid::Codes => LATENT_TABLE_CELLS,
+            TableGrid::Values => LATENT_TABLE_VALUE_CELLS,
+        };
         let b = body(o, "normal_cdf");
         let coeffs: Vec<f32> = b
             .iter()
@@ -293,7 +306,11 @@ fn latent_table_layout_and_cdf_are_the_kernels() {
         let offset = (o.def.param_count() - o.def.table_len()) as u32;
         assert_eq!(
             uints(at),
-            [offset, SLICE_LEN as u32, NODES as u32],
+            [
+                offset,
+                ((want_cells + 1) * (want_cells + 1)) as u32,
+                want_cells as u32 + 1
+            ],
             "{}",
             o.label
         );
@@ -310,14 +327,14 @@ fn latent_table_layout_and_cdf_are_the_kernels() {
         for l in b.iter().filter(|l| l.starts_with("if (")) {
             let want = if l.contains("==") {
                 // The trapezoid weights' ends.
-                vec![0, LATENT_TABLE_CELLS as u32]
+                vec![0, want_cells as u32]
             } else {
                 cells += 1;
-                vec![LATENT_TABLE_CELLS as u32 - 1]
+                vec![want_cells as u32 - 1]
             };
             assert_eq!(uints(l), want, "{}: {l}", o.label);
         }
         assert_eq!(cells, 2, "{}: the cells of both coordinates", o.label);
     }
-    assert_eq!(seen, 5, "the table model in every language and precision");
+    assert_eq!(seen, 10, "the table models in every language and precision");
 }

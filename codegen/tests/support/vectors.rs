@@ -6,7 +6,7 @@
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::blob::{blob_len, write_blob};
 use diffbsdf::internals::Diagnostics;
-use diffbsdf::{AnyModel, Domain, ModelDef, ModelName, Net, Precision};
+use diffbsdf::{AnyModel, Domain, ModelDef, ModelName, Net, Precision, TableGrid};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -261,13 +261,30 @@ pub fn test_models() -> Vec<TestModel> {
             blob: random_blob(
                 &named(
                     ModelDef {
-                        latent_table: true,
+                        latent_table: Some(TableGrid::Codes),
                         ..warped(half_vector)
                     },
                     "random_half_vector_table",
                     Precision::F32,
                 ),
                 24,
+                1.2,
+            ),
+        },
+        // The 16-cell table of blob-precision values (blobs written before the coded
+        // table), f16.
+        TestModel {
+            name: "random_hv_value_table_f16".into(),
+            blob: random_blob(
+                &named(
+                    ModelDef {
+                        latent_table: Some(TableGrid::Values),
+                        ..warped(iso(half_vector))
+                    },
+                    "random_hv_value_table_f16",
+                    Precision::F16,
+                ),
+                25,
                 1.2,
             ),
         },

@@ -8,7 +8,7 @@ use super::grid::wi_grid;
 use super::kl::{kl_divergence, KlGrid};
 use super::sampler::{draw, weight, SamplerKind};
 use super::stats::WeightStats;
-use diffbsdf::AnyModel;
+use diffbsdf::{AnyModel, ModelDef, Precision};
 use diffbsdf_materials::{from_spherical, DVec3, Material};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
@@ -229,7 +229,7 @@ pub fn evaluate(model: &AnyModel, material: &dyn Material, cfg: &EvalConfig) -> 
     let material_sampler = summarize(&rows, |r| &r.material);
     let cosine = summarize(&rows, |r| &r.cosine);
     let def = *model.def();
-    let params = def.param_count();
+    let bytes = |precision| diffbsdf::internals::blob::blob_len(&ModelDef { precision, ..def });
     let cost = (cfg.timing_calls > 0).then(|| {
         let wi = from_spherical(45f64.to_radians(), 0.3);
         cost::measure(model, material, wi, cfg.timing_calls)
@@ -238,12 +238,8 @@ pub fn evaluate(model: &AnyModel, material: &dyn Material, cfg: &EvalConfig) -> 
         material: material.spec(),
         domain: domain.name(),
         steps: def.default_steps,
-        blob_bytes_f32: diffbsdf::internals::blob::HEADER_LEN
-            + 4 * params
-            + diffbsdf::internals::blob::CHECKSUM_LEN,
-        blob_bytes_f16: diffbsdf::internals::blob::HEADER_LEN
-            + 2 * params
-            + diffbsdf::internals::blob::CHECKSUM_LEN,
+        blob_bytes_f32: bytes(Precision::F32),
+        blob_bytes_f16: bytes(Precision::F16),
         samples_per_wi: cfg.samples,
         rv_ratio_to_material: learned.rv_mean / material_sampler.rv_mean,
         learned,
