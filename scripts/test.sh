@@ -71,7 +71,7 @@ section "tests";   cargo test --release --workspace
 section "kernel with the fma feature"
 grep -qw fma /proc/cpuinfo || { echo "this CPU has no FMA: the fma feature cannot be tested here"; exit 1; }
 cargo test --release -p diffbsdf --features fma --lib --test shipped_models --test pdf_consistency \
-  --test bijectivity --test jacobian --test hard_cases --test robustness
+  --test bijectivity --test jacobian --test hard_cases --test robustness --test batch
 # and the generated C with its multiply-adds fused (`fused`, `--fma`) against that kernel
 cargo test --release -p diffbsdf-codegen --features diffbsdf/fma --test c_header
 

@@ -45,3 +45,23 @@ pub mod net {
 }
 
 pub use crate::diagnostics::Diagnostics;
+
+/// The batch forms' flow in lanes: `out[i]` as [`crate::Model::sample_direction_steps`]
+/// bit for bit, [`crate::spec::BATCH_LANES`] samples per flow pass, in any build
+/// ([`crate::Model::sample_direction_batch`] takes this path with the `fma` feature).
+pub fn sample_direction_lanes<
+    const BE: usize,
+    const BW: usize,
+    const BM: usize,
+    const VE: usize,
+    const VW: usize,
+    const VM: usize,
+>(
+    model: &crate::Model<BE, BW, BM, VE, VW, VM>,
+    wi: &[glam::Vec3],
+    u: &[glam::Vec2],
+    steps: u32,
+    out: &mut [glam::Vec3],
+) -> Result<(), crate::BatchError> {
+    model.sample_direction_lanes(wi, u, steps, out)
+}

@@ -10,12 +10,26 @@
 //! model's default. Densities are per unit solid angle. Invalid input, or a sample that
 //! leaves the domain, gives `None` (or a PDF of 0): the lost mass is never renormalised.
 
+use crate::flow::Conditioned;
 use crate::frame::IncidentFrame;
 use crate::input::{uniform_pair, unit_direction};
 use crate::math::exp;
 use crate::model::Model;
 use crate::spec;
 use glam::{Vec2, Vec3};
+
+/// A direction's flow before it runs ([`Model::direction_start`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DirectionStart<const VW: usize> {
+    /// The rotation into the nets' frame.
+    pub frame: IncidentFrame,
+    /// `wi` in that frame.
+    pub wi: Vec3,
+    /// What `wi` fixes for the call.
+    pub c: Conditioned<VW>,
+    /// The flow's start point.
+    pub x0: [f32; 2],
+}
 
 /// A sampled direction and the density it was sampled with (per unit solid angle).
 #[repr(C)]
@@ -94,13 +108,31 @@ impl<
     #[inline(always)]
     #[must_use]
     pub fn sample_direction_steps(&self, wi: Vec3, u: Vec2, steps: u32) -> Option<Vec3> {
-        let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
         let steps = self.resolve_steps(steps)?;
+        let start = self.direction_start(wi, u)?;
+        let x = self.flow(&start.c, start.x0, steps);
+        self.direction_end(&start, x)
+    }
+
+    /// What a direction's flow starts from: `wi` checked and in the nets' frame, its
+    /// conditioning and the start point for `u`; `None` for invalid input.
+    #[inline(always)]
+    pub(crate) fn direction_start(&self, wi: Vec3, u: Vec2) -> Option<DirectionStart<VW>> {
+        let (wi, u) = (self.incident(wi)?, uniform_pair(u)?);
         let (frame, wi) = self.incident_frame(wi);
         let c = self.condition(wi);
-        let x = self.flow(&c, self.flow_start(&c, u), steps);
-        let wo = self.def.domain.to_direction(self.chart_point(&c, x), wi)?;
-        Some(frame.to_world(wo)).filter(|wo| wo.is_finite())
+        let x0 = self.flow_start(&c, u);
+        Some(DirectionStart { frame, wi, c, x0 })
+    }
+
+    /// The world direction of the flow's end point `x`; `None` outside the domain.
+    #[inline(always)]
+    pub(crate) fn direction_end(&self, start: &DirectionStart<VW>, x: [f32; 2]) -> Option<Vec3> {
+        let wo = self
+            .def
+            .domain
+            .to_direction(self.chart_point(&start.c, x), start.wi)?;
+        Some(start.frame.to_world(wo)).filter(|wo| wo.is_finite())
     }
 
     /// [`Model::sample`] with `steps` Euler steps (0: the model's default; at most

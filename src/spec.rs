@@ -52,6 +52,13 @@ pub const STATUS_OK: i32 = 0;
 /// sample left the domain); its outputs are then zero.
 pub const STATUS_NO_SAMPLE: i32 = 1;
 
+/// Samples the batch calls without a PDF ([`crate::Model::sample_direction_batch`]) run
+/// through the flow together, one per lane of each dense layer's multiply-adds: every
+/// sample's arithmetic is the one of a call alone (bit for bit); what changes is that the
+/// lanes' independent sums overlap in the multiply-add pipeline (docs/performance.md,
+/// "Samples in lanes").
+pub const BATCH_LANES: usize = 8;
+
 /// Partial sums of the readout's dot products (kernel) and of the trainer's: sum `l` takes
 /// the inputs `i = l (mod DOT_PARTIAL_SUMS)` in order, and the sums are added as
 /// `((s0 + s4) + (s2 + s6)) + ((s1 + s5) + (s3 + s7))`. Lets a dot product vectorise

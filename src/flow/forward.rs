@@ -28,6 +28,30 @@ impl<
         x
     }
 
+    /// [`Model::flow`] from `K` start points at once, each lane bit for bit as alone
+    /// ([`crate::net::VelocityNet::velocity_lanes`]).
+    #[inline(always)]
+    pub(crate) fn flow_lanes<const K: usize>(
+        &self,
+        c: &[Conditioned<VW>; K],
+        x0: [[f32; 2]; K],
+        steps: u32,
+    ) -> [[f32; 2]; K] {
+        let domain = self.def.domain;
+        let h = 1.0 / steps as f32;
+        let mut x = x0.map(|p| domain.advance(p, [0.0, 0.0]));
+        for k in 0..steps {
+            let t = step_time(k, h);
+            let step = c.map(|ci| self.velocity.at_time(&ci.cond, t));
+            let feat = x.map(|p| domain.features(p));
+            let v = self.velocity.velocity_lanes(&step, &feat);
+            for (p, vs) in x.iter_mut().zip(v) {
+                *p = domain.advance(*p, [h * vs[0], h * vs[1]]);
+            }
+        }
+        x
+    }
+
     /// The pass with Jacobians from `x0`: `x_N`, `sum_k ln det(I + h dv/dx(x_k))` and the
     /// product of the step matrices; `None` if a step is not orientation preserving
     /// (`det <= 0`), where the density formula would not hold.

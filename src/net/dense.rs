@@ -31,6 +31,55 @@ impl<const I: usize, const O: usize> Dense<I, O> {
         z
     }
 
+    /// [`Dense::forward`] of `K` inputs at once, laid out lanes innermost (`x[i][s]`: input
+    /// `i` of sample `s`, so that one vector holds `K` samples): each lane runs the same
+    /// operations in the same order as alone (bit for bit), while the layer's `O`
+    /// independent sums fill the multiply-add pipeline and each weight, loaded once, serves
+    /// every lane.
+    ///
+    /// The outputs go in blocks of 8, whose `8 x K` sums stay in
+    /// registers over all `I` inputs.
+    #[inline(always)]
+    pub fn forward_lanes<const K: usize>(&self, x: &[[f32; K]; I]) -> [[f32; K]; O] {
+        let mut z = [[0.0; K]; O];
+        let blocks = O / OUT_BLOCK;
+        for j in 0..blocks {
+            let o0 = j * OUT_BLOCK;
+            let mut acc = [[0.0f32; K]; OUT_BLOCK];
+            for (a, &b) in acc.iter_mut().zip(self.b.iter().skip(o0)) {
+                *a = [b; K];
+            }
+            for (col, xi) in self.w.iter().zip(x) {
+                let Some(w) = col
+                    .get(o0..o0 + OUT_BLOCK)
+                    .and_then(|w| <&[f32; OUT_BLOCK]>::try_from(w).ok())
+                else {
+                    continue;
+                };
+                for (a, &wo) in acc.iter_mut().zip(w) {
+                    for (zs, &xs) in a.iter_mut().zip(xi) {
+                        *zs = mul_add(wo, xs, *zs);
+                    }
+                }
+            }
+            for (zo, a) in z.iter_mut().skip(o0).zip(acc) {
+                *zo = a;
+            }
+        }
+        // Outputs past the last whole block, one at a time.
+        for (o, zo) in z.iter_mut().enumerate().skip(blocks * OUT_BLOCK) {
+            let mut a = [self.b.get(o).copied().unwrap_or(0.0); K];
+            for (col, xi) in self.w.iter().zip(x) {
+                let wo = col.get(o).copied().unwrap_or(0.0);
+                for (zs, &xs) in a.iter_mut().zip(xi) {
+                    *zs = mul_add(wo, xs, *zs);
+                }
+            }
+            *zo = a;
+        }
+        z
+    }
+
     /// `W x + b` and the two tangents `W dx_j` (forward-mode derivative).
     #[inline(always)]
     pub fn forward_tangents(&self, x: &[f32; I], dx: &[[f32; I]; 2]) -> ([f32; O], [[f32; O]; 2]) {
@@ -79,6 +128,9 @@ impl<const I: usize, const O: usize> Dense<I, O> {
     }
 }
 
+/// Outputs per block of [`Dense::forward_lanes`]: 8 sums of 8 lanes are 8 AVX registers.
+const OUT_BLOCK: usize = 8;
+
 /// Lanes of the partial sums in a dot product (`spec::DOT_PARTIAL_SUMS`).
 const LANES: usize = crate::spec::DOT_PARTIAL_SUMS;
 
@@ -103,6 +155,27 @@ fn dot<const N: usize>(a: &[f32; N], b: &[f32; N]) -> f32 {
     (half[0] + half[2]) + (half[1] + half[3])
 }
 
+/// [`dot`] of `a` with `K` vectors laid out lanes innermost (`x[i][s]`), each lane's sum in
+/// [`dot`]'s order: partial sum `l` takes the inputs `i = l (mod LANES)`, then the same
+/// tree.
+#[inline(always)]
+fn dot_lanes<const N: usize, const K: usize>(a: &[f32; N], x: &[[f32; K]; N]) -> [f32; K] {
+    let mut acc = [[0.0f32; K]; LANES];
+    for (i, (&ai, xi)) in a.iter().zip(x).enumerate() {
+        if let Some(al) = acc.get_mut(i % LANES) {
+            for (s, &xs) in al.iter_mut().zip(xi) {
+                *s = mul_add(ai, xs, *s);
+            }
+        }
+    }
+    let mut out = [0.0f32; K];
+    for (s, o) in out.iter_mut().enumerate() {
+        let half = |l: usize| acc[l][s] + acc[l + LANES / 2][s];
+        *o = (half(0) + half(2)) + (half(1) + half(3));
+    }
+    out
+}
+
 /// `z = b + W x` for a layer with few outputs, stored row by row.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Readout<const I: usize, const O: usize> {
@@ -123,6 +196,19 @@ impl<const I: usize, const O: usize> Readout<I, O> {
         let mut z = self.b;
         for (zo, row) in z.iter_mut().zip(&self.w) {
             *zo += dot(row, x);
+        }
+        z
+    }
+
+    /// [`Readout::forward`] of `K` inputs laid out lanes innermost ([`Dense::forward_lanes`]),
+    /// each lane bit for bit as alone.
+    #[inline(always)]
+    pub fn forward_lanes<const K: usize>(&self, x: &[[f32; K]; I]) -> [[f32; K]; O] {
+        let mut z = [[0.0; K]; O];
+        for ((zo, row), &b) in z.iter_mut().zip(&self.w).zip(&self.b) {
+            for (zs, d) in zo.iter_mut().zip(dot_lanes(row, x)) {
+                *zs = b + d;
+            }
         }
         z
     }

@@ -8,7 +8,7 @@
 //! Forward-mode Jacobian: with `dz1/dx_j = Wx dfeat/dx_j`, every hidden layer maps
 //! `dh = silu'(z) * dz` and `dz' = W dh`, and the readout gives `dv/dx_j = Wout dh_j`.
 
-use super::activation::{silu_layer, silu_layer_tangents};
+use super::activation::{silu, silu_layer, silu_layer_tangents};
 use super::dense::{Dense, Readout};
 
 use crate::math::mul_add;
@@ -79,6 +79,37 @@ impl<const E: usize, const W: usize, const M: usize> VelocityNet<E, W, M> {
             silu_layer(&mut h);
         }
         self.out.forward(&h)
+    }
+
+    /// [`VelocityNet::velocity`] at `K` states at once, each lane bit for bit as alone: the
+    /// hidden layers laid out lanes innermost (`h[o][s]`, [`Dense::forward_lanes`]).
+    #[inline(always)]
+    pub fn velocity_lanes<const K: usize>(
+        &self,
+        step: &[[f32; W]; K],
+        feat: &[[f32; MAX_FEATURES]; K],
+    ) -> [[f32; 2]; K] {
+        // The first layer as `first_layer` computes it, lane by lane.
+        let mut h = [[0.0f32; K]; W];
+        for (o, ho) in h.iter_mut().enumerate() {
+            for (hs, st) in ho.iter_mut().zip(step) {
+                *hs = st[o];
+            }
+        }
+        for (f, col) in self.wx.iter().enumerate() {
+            for (ho, &w) in h.iter_mut().zip(col) {
+                for (hs, ft) in ho.iter_mut().zip(feat) {
+                    *hs = mul_add(w, ft[f], *hs);
+                }
+            }
+        }
+        h.iter_mut().flatten().for_each(|v| *v = silu(*v));
+        for layer in &self.mid {
+            h = layer.forward_lanes(&h);
+            h.iter_mut().flatten().for_each(|v| *v = silu(*v));
+        }
+        let v = self.out.forward_lanes(&h);
+        core::array::from_fn(|s| [v[0][s], v[1][s]])
     }
 
     /// `v` and `dv/dx`, where `dfeat[j]` is the derivative of the features along `x_j`.
