@@ -57,12 +57,18 @@ impl<
             return self.sample_direction_lanes(wi, u, steps, out);
         }
         same_len(wi.len(), u.len(), out.len())?;
+        self.directions_one_at_a_time(wi, u, steps, out);
+        Ok(())
+    }
+
+    /// `out[i] = sample_direction_steps(wi[i], u[i], steps)`, `Vec3::ZERO` if invalid.
+    #[inline(always)]
+    fn directions_one_at_a_time(&self, wi: &[Vec3], u: &[Vec2], steps: u32, out: &mut [Vec3]) {
         for ((o, &w), &r) in out.iter_mut().zip(wi).zip(u) {
             *o = self
                 .sample_direction_steps(w, r, steps)
                 .unwrap_or(Vec3::ZERO);
         }
-        Ok(())
     }
 
     /// [`Model::sample_direction_batch`] with [`spec::BATCH_LANES`] samples per flow pass,
@@ -86,13 +92,7 @@ impl<
         for ((w, r), o) in chunks {
             match (<&[Vec3; LANES]>::try_from(w), <&[Vec2; LANES]>::try_from(r)) {
                 (Ok(w), Ok(r)) => self.directions_in_lanes(w, r, steps, o),
-                _ => {
-                    for ((o, &w), &r) in o.iter_mut().zip(w).zip(r) {
-                        *o = self
-                            .sample_direction_steps(w, r, steps)
-                            .unwrap_or(Vec3::ZERO);
-                    }
-                }
+                _ => self.directions_one_at_a_time(w, r, steps, o),
             }
         }
         Ok(())
