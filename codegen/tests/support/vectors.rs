@@ -338,6 +338,22 @@ impl Kernel {
     pub fn load(blob: &[u8]) -> Kernel {
         Kernel(Box::new(AnyModel::from_blob(blob).expect("blob loads")))
     }
+    /// The kernel holding the weights a shader of `float` reads: the blob's, rounded to f16
+    /// for f16 output, as its parameter block holds them (docs/codegen.md). The f16 bounds
+    /// then measure the f16 arithmetic, not the rounding of the weights.
+    pub fn load_for(blob: &[u8], float: diffbsdf_codegen::Float) -> Kernel {
+        if float == diffbsdf_codegen::Float::F32 {
+            return Kernel::load(blob);
+        }
+        let model = AnyModel::from_blob(blob).expect("blob loads");
+        let mut def = *model.def();
+        def.precision = Precision::F16;
+        let mut out = vec![0u8; blob_len(&def)];
+        model
+            .write_blob(Precision::F16, &mut out)
+            .expect("f16 blob");
+        Kernel::load(&out)
+    }
     pub fn domain(&self) -> Domain {
         self.0.def().domain
     }
