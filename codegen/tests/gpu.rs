@@ -242,7 +242,7 @@ fn run_language(language: Language, float: Float) {
             );
             for model in group {
                 // The kernel with the weights the shader reads (f16-rounded in f16 output).
-                let kernel = Kernel::load_for(&model.blob, float);
+                let kernel = Kernel::load_for(&model.blob, float == Float::F16);
                 let desc = ModelDesc::from_blob(&model.blob).expect("blob");
                 // Two materials in one buffer: another one first, this model second.
                 let mut params: Vec<f32> = desc.params.iter().map(|w| 0.5 - w).collect();

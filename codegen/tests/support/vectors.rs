@@ -338,11 +338,11 @@ impl Kernel {
     pub fn load(blob: &[u8]) -> Kernel {
         Kernel(Box::new(AnyModel::from_blob(blob).expect("blob loads")))
     }
-    /// The kernel holding the weights a shader of `float` reads: the blob's, rounded to f16
-    /// for f16 output, as its parameter block holds them (docs/codegen.md). The f16 bounds
+    /// The kernel holding the weights a shader reads: the blob's, rounded to f16 for f16
+    /// output (`half`), as its parameter block holds them (docs/codegen.md). The f16 bounds
     /// then measure the f16 arithmetic, not the rounding of the weights.
-    pub fn load_for(blob: &[u8], float: diffbsdf_codegen::Float) -> Kernel {
-        if float == diffbsdf_codegen::Float::F32 {
+    pub fn load_for(blob: &[u8], half: bool) -> Kernel {
+        if !half {
             return Kernel::load(blob);
         }
         let model = AnyModel::from_blob(blob).expect("blob loads");
