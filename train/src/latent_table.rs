@@ -14,9 +14,11 @@
 
 use crate::error::TrainError;
 use crate::metrics::sampler::{from_glam, to_glam, weight, Drawn};
+use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::base::table::{code_value_f32, encode, slice_incidence, trapezoid};
 use diffbsdf::spec::LATENT_TABLE_SLICES as S;
-use diffbsdf::{AnyModel, ModelDef, TableGrid};
+use diffbsdf::{AnyModel, ModelDef, Sample, TableGrid};
+use diffbsdf_ffi::slices::sample_batch;
 use diffbsdf_materials::{DVec3, Material};
 use rand::Rng;
 use rand::SeedableRng;
@@ -213,7 +215,12 @@ fn relative_variance(draws: &[SliceDraw], v: Option<&[f64]>) -> f64 {
     }
 }
 
-/// The slice's draws: incidence from the slice's hat, `u` uniform.
+/// Draws per call of the kernel's batch.
+const BATCH: usize = 4096;
+
+/// The slice's draws: incidence from the slice's hat, `u` uniform. The flow's samples come
+/// in batches through `diffbsdf_ffi::slices` (the kernel's copy compiled with AVX2 where
+/// the CPU has it, the same bits as one `sample` call at a time).
 fn slice_draws(
     flow: &AnyModel,
     material: &dyn Material,
@@ -224,30 +231,60 @@ fn slice_draws(
     let mut rng = Pcg64::seed_from_u64(seed ^ (0x7AB1_E000 + k as u64));
     let isotropic = flow.def().isotropic;
     let mut draws = Vec::with_capacity(cfg.draws_per_slice);
-    for _ in 0..cfg.draws_per_slice {
-        // The slice's hat in incidence, reflected at the ends.
-        let s = k as f64 + rng.gen::<f64>() - rng.gen::<f64>();
-        let s = (s.abs()).min(2.0 * (S - 1) as f64 - s.abs());
-        let z = slice_incidence(s).max(1e-4);
-        let phi = if isotropic {
-            0.0
-        } else {
-            rng.gen::<f64>() * std::f64::consts::TAU
-        };
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let wi = DVec3::new(r * phi.cos(), r * phi.sin(), z);
-        let u = [rng.gen::<f64>(), rng.gen::<f64>()];
-        let q = flow_weight(flow, material, wi, u);
-        let (x, y) = (u[0] * C as f64, u[1] * C as f64);
-        let (i, j) = ((x as usize).min(C - 1), (y as usize).min(C - 1));
-        draws.push(SliceDraw {
-            node: i * NODES + j,
-            a: x - i as f64,
-            b: y - j as f64,
-            q2: q * q,
-        });
+    let mut incidences = Vec::with_capacity(BATCH);
+    let mut points = Vec::with_capacity(BATCH);
+    let mut samples = vec![Sample::INVALID; BATCH];
+    while draws.len() < cfg.draws_per_slice {
+        let n = BATCH.min(cfg.draws_per_slice - draws.len());
+        incidences.clear();
+        points.clear();
+        for _ in 0..n {
+            let (wi, u) = slice_point(&mut rng, k, isotropic);
+            incidences.push(wi);
+            points.push(u);
+        }
+        let wi: Vec<Vec3> = incidences.iter().map(|&w| to_glam(w)).collect();
+        let u: Vec<Vec2> = points
+            .iter()
+            .map(|u| Vec2::new(u[0] as f32, u[1] as f32))
+            .collect();
+        let out = &mut samples[..n];
+        if sample_batch(flow, &wi, &u, 0, out).is_err() {
+            out.fill(Sample::INVALID);
+        }
+        for ((&wi, u), s) in incidences.iter().zip(&points).zip(out.iter()) {
+            let drawn = s.is_valid().then(|| Drawn {
+                wo: from_glam(s.wo),
+                pdf: f64::from(s.pdf),
+            });
+            let q = weight(material, wi, drawn);
+            let (x, y) = (u[0] * C as f64, u[1] * C as f64);
+            let (i, j) = ((x as usize).min(C - 1), (y as usize).min(C - 1));
+            draws.push(SliceDraw {
+                node: i * NODES + j,
+                a: x - i as f64,
+                b: y - j as f64,
+                q2: q * q,
+            });
+        }
     }
     draws
+}
+
+/// One draw's incidence (from slice `k`'s hat in incidence, reflected at the ends) and its
+/// uniform `u`.
+fn slice_point(rng: &mut Pcg64, k: usize, isotropic: bool) -> (DVec3, [f64; 2]) {
+    let s = k as f64 + rng.gen::<f64>() - rng.gen::<f64>();
+    let s = (s.abs()).min(2.0 * (S - 1) as f64 - s.abs());
+    let z = slice_incidence(s).max(1e-4);
+    let phi = if isotropic {
+        0.0
+    } else {
+        rng.gen::<f64>() * std::f64::consts::TAU
+    };
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let wi = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+    (wi, [rng.gen::<f64>(), rng.gen::<f64>()])
 }
 
 /// The root of the bilinearly weighted mean of `q^2` around each node: the least
@@ -303,17 +340,6 @@ fn descend(v: &mut [f64], draws: &[SliceDraw], floor: f64) {
             *x *= ratio.sqrt();
         }
     }
-}
-
-/// The flow's importance weight `Y(f) |cos theta_o| / pdf` for `u`; 0 where it draws
-/// nothing.
-fn flow_weight(flow: &AnyModel, material: &dyn Material, wi: DVec3, u: [f64; 2]) -> f64 {
-    let u = diffbsdf::glam::Vec2::new(u[0] as f32, u[1] as f32);
-    let drawn = flow.sample(to_glam(wi), u).map(|s| Drawn {
-        wo: from_glam(s.wo),
-        pdf: f64::from(s.pdf),
-    });
-    weight(material, wi, drawn)
 }
 
 #[cfg(test)]

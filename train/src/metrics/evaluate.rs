@@ -6,7 +6,7 @@ use super::cost::{self, Cost};
 use super::exactness::{self, Exactness};
 use super::grid::wi_grid;
 use super::kl::{kl_divergence, KlGrid};
-use super::sampler::{draw, weight, SamplerKind};
+use super::sampler::{draw, learned_weights, weight, SamplerKind};
 use super::stats::WeightStats;
 use diffbsdf::{AnyModel, ModelDef, Precision};
 use diffbsdf_materials::{from_spherical, DVec3, Material};
@@ -137,15 +137,19 @@ impl At<'_> {
     fn row(&self, kind: SamplerKind, with_kl: bool, seed: u64) -> SamplerRow {
         let (material, model, wi) = (self.material, self.model, self.wi);
         let mut rng = Pcg64::seed_from_u64(seed);
-        let mut w: Vec<f64> = (0..self.cfg.samples)
-            .map(|_| {
-                weight(
-                    material,
-                    wi,
-                    draw(kind, material, Some(model), wi, &mut rng),
-                )
-            })
-            .collect();
+        let mut w: Vec<f64> = if kind == SamplerKind::Learned {
+            learned_weights(material, model, wi, self.cfg.samples, &mut rng)
+        } else {
+            (0..self.cfg.samples)
+                .map(|_| {
+                    weight(
+                        material,
+                        wi,
+                        draw(kind, material, Some(model), wi, &mut rng),
+                    )
+                })
+                .collect()
+        };
         let kl = match (self.cfg.kl, with_kl) {
             (Some(g), true) => Some(kl_divergence(kind, material, Some(model), wi, self.both, g)),
             _ => None,

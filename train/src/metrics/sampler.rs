@@ -2,7 +2,8 @@
 //! sampler and cosine-weighted hemisphere sampling (on the side of `wi`).
 
 use diffbsdf::glam;
-use diffbsdf::AnyModel;
+use diffbsdf::{AnyModel, Sample};
+use diffbsdf_ffi::slices::sample_batch;
 use diffbsdf_materials::{DVec3, Material};
 use rand::Rng;
 use rand_pcg::Pcg64;
@@ -78,6 +79,42 @@ pub fn draw(
     }
 }
 
+/// Draws per call of the kernel's batch in [`learned_weights`].
+const BATCH: usize = 4096;
+
+/// The weights ([`weight`]) of `n` draws of the learned model at `wi`: the same `u` from
+/// `rng` and the same samples as `n` calls of [`draw`], the kernel run in batches through
+/// `diffbsdf_ffi::slices` (its copy compiled with AVX2 where the CPU has it, the same bits).
+pub fn learned_weights(
+    material: &dyn Material,
+    model: &AnyModel,
+    wi: DVec3,
+    n: usize,
+    rng: &mut Pcg64,
+) -> Vec<f64> {
+    let wi32 = to_glam(wi);
+    let mut weights = Vec::with_capacity(n);
+    let mut samples = vec![Sample::INVALID; BATCH];
+    while weights.len() < n {
+        let m = BATCH.min(n - weights.len());
+        let u: Vec<glam::Vec2> = (0..m)
+            .map(|_| glam::Vec2::new(rng.gen::<f32>(), rng.gen::<f32>()))
+            .collect();
+        let out = &mut samples[..m];
+        if sample_batch(model, &vec![wi32; m], &u, 0, out).is_err() {
+            out.fill(Sample::INVALID);
+        }
+        weights.extend(out.iter().map(|s| {
+            let drawn = s.is_valid().then(|| Drawn {
+                wo: from_glam(s.wo),
+                pdf: s.pdf as f64,
+            });
+            weight(material, wi, drawn)
+        }));
+    }
+    weights
+}
+
 /// Density of `kind` at `wo` (for KL): the learned model's by its exact inverse.
 pub fn density(
     kind: SamplerKind,
@@ -110,5 +147,71 @@ pub fn weight(material: &dyn Material, wi: DVec3, d: Option<Drawn>) -> f64 {
         w
     } else {
         0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use diffbsdf_materials::{from_spherical, parse_spec};
+    use rand::SeedableRng;
+
+    fn shipped(name: &str) -> AnyModel {
+        let path = format!("{}/../models/{name}.dbsdf", env!("CARGO_MANIFEST_DIR"));
+        AnyModel::from_blob(&std::fs::read(path).unwrap()).unwrap()
+    }
+
+    /// The batched draws are [`draw`]'s, one at a time, bit for bit: the same `u` from the
+    /// stream, the same samples, the same weights (a length that is not a multiple of the
+    /// batch, normal to grazing `wi`, a disk model and a half-vector one with its table).
+    #[test]
+    fn learned_weights_are_the_draws_one_at_a_time() {
+        let cases = [
+            (
+                "conductor-ggx-a0.3-cu-disk",
+                "conductor:ggx,alpha=0.3,metal=Cu",
+            ),
+            (
+                "conductor-ggx-a0.05-0.3-cu-hv",
+                "conductor:ggx,alpha=0.05,alpha_y=0.3,metal=Cu",
+            ),
+        ];
+        for (name, spec) in cases {
+            let model = shipped(name);
+            let material = parse_spec(spec).unwrap();
+            for theta in [0.0f64, 45.0, 89.0] {
+                let wi = from_spherical(theta.to_radians(), 0.7);
+                let n = BATCH + 37;
+                let mut rng = Pcg64::seed_from_u64(5);
+                let batched = learned_weights(material.as_ref(), &model, wi, n, &mut rng);
+                let mut rng = Pcg64::seed_from_u64(5);
+                let single: Vec<f64> = (0..n)
+                    .map(|_| {
+                        let d = draw(
+                            SamplerKind::Learned,
+                            material.as_ref(),
+                            Some(&model),
+                            wi,
+                            &mut rng,
+                        );
+                        weight(material.as_ref(), wi, d)
+                    })
+                    .collect();
+                assert_eq!(batched.len(), n);
+                let differ = batched
+                    .iter()
+                    .zip(&single)
+                    .filter(|(a, b)| a.to_bits() != b.to_bits())
+                    .count();
+                assert_eq!(differ, 0, "{name} at {theta} deg");
+                assert!(single.iter().filter(|&&w| w > 0.0).count() > n / 2);
+                // The stream is left where the draws one at a time leave it.
+                assert_eq!(rng.gen::<u64>(), {
+                    let mut again = Pcg64::seed_from_u64(5);
+                    learned_weights(material.as_ref(), &model, wi, n, &mut again);
+                    again.gen::<u64>()
+                });
+            }
+        }
     }
 }
