@@ -162,6 +162,14 @@ impl TableSlice {
     }
 }
 
+/// The two slices a `wi` with `wi.z` mixes, as the kernel mixes them: the lower slice `k`
+/// and the weight `t` of slice `k + 1` (docs/math.md, (75)).
+#[must_use]
+pub fn slice_pair(wi_z: f32) -> (usize, f32) {
+    let sl = TableSlice::of(wi_z);
+    (sl.k, sl.t)
+}
+
 /// `wi.z` at the slice position `s` (in slices, `0 ..= S - 1`): the inverse of
 /// the slices' `s = (1 - sqrt(wi.z)) (S - 1)`, `wi.z = (1 - s / (S - 1))^2`.
 #[must_use]

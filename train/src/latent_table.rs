@@ -15,7 +15,9 @@
 use crate::error::TrainError;
 use crate::metrics::sampler::{from_glam, to_glam, weight, Drawn};
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::internals::base::table::{code_value_f32, encode, slice_incidence, trapezoid};
+use diffbsdf::internals::base::table::{
+    code_value_f32, encode, slice_incidence, slice_pair, trapezoid,
+};
 use diffbsdf::spec::LATENT_TABLE_SLICES as S;
 use diffbsdf::{AnyModel, ModelDef, Sample, TableGrid};
 use diffbsdf_ffi::slices::sample_batch;
@@ -42,25 +44,31 @@ pub struct TableConfig {
     /// Weight of the uniform density in every slice.
     pub floor: f64,
     /// Multiplicative updates of the node values towards the least `E[q^2 / T]` (78)
-    /// after the root-mean-square start (0: the start alone).
+    /// after the root-mean-square start (0: the start alone), each slice on its own.
     pub iterations: usize,
+    /// Joint updates of every slice after those, against the density the kernel evaluates
+    /// for each draw's incidence: two slices mixed (docs/math.md, (80)).
+    pub joint_iterations: usize,
 }
 
 impl TableConfig {
     /// The default: 10^6 draws per slice (about 900 per node of the 33 x 33 grid), a
     /// uniform share of 5 %, 20 updates of (78) (docs/measured-materials.md, "The latent
     /// table" and "A finer table in 8-bit codes": 300 000 draws, 275 per node, measured
-    /// 4-15 % more variance).
+    /// 4-15 % more variance), then 10 joint updates of (80) ("Fitting the slices together":
+    /// 0-9 % less variance; settled within about ten).
     pub const DEFAULT: TableConfig = TableConfig {
         draws_per_slice: 1_000_000,
         floor: 0.05,
         iterations: 20,
+        joint_iterations: 10,
     };
     /// No table.
     pub const OFF: TableConfig = TableConfig {
         draws_per_slice: 0,
         floor: 0.05,
         iterations: 0,
+        joint_iterations: 0,
     };
 }
 
@@ -89,9 +97,31 @@ pub fn fit_latent_table(
         return Err(TrainError::Mismatch);
     }
     let flow = without_table(model)?;
+    // Each slice fitted on its own draws, then every slice together.
+    let mut per: Vec<(Vec<SliceDraw>, Vec<f64>)> = (0..S)
+        .into_par_iter()
+        .map(|k| {
+            let draws = slice_draws(&flow, material, cfg, seed, k);
+            let mut v = root_mean_square(&draws);
+            for _ in 0..cfg.iterations {
+                descend(&mut v, &draws, cfg.floor);
+            }
+            (draws, v)
+        })
+        .collect();
+    for _ in 0..cfg.joint_iterations {
+        joint_descend(&mut per, cfg.floor);
+    }
+    let stored: Vec<Vec<f32>> = per.iter().map(|(_, v)| stored_values(v, cfg)).collect();
     let slices: Vec<(Vec<f32>, TableFit)> = (0..S)
         .into_par_iter()
-        .map(|k| fit_slice(&flow, material, cfg, seed, k))
+        .map(|k| {
+            let fit = TableFit {
+                rv_flow: relative_variance(&per[k].0, |_| 1.0),
+                rv_table: relative_variance(&per[k].0, |d| mixed_density(d, &stored)),
+            };
+            (stored[k].clone(), fit)
+        })
         .collect();
     let count = slices.len().max(1) as f64;
     let fit = TableFit {
@@ -130,6 +160,9 @@ struct SliceDraw {
     a: f64,
     b: f64,
     q2: f64,
+    /// The lower of the two slices the draw's incidence mixes, and the upper one's weight.
+    lo: usize,
+    t: f64,
 }
 
 impl SliceDraw {
@@ -156,36 +189,29 @@ fn integral(v: &[f64]) -> f64 {
     v.iter().enumerate().map(|(n, x)| node_weight(n) * x).sum()
 }
 
-/// One slice's node values (the fitted density, normalised and mixed with the uniform
-/// density, rounded to the stored codes) and the relative variance on its draws before and
-/// after.
-fn fit_slice(
-    flow: &AnyModel,
-    material: &dyn Material,
-    cfg: &TableConfig,
-    seed: u64,
-    k: usize,
-) -> (Vec<f32>, TableFit) {
-    let draws = slice_draws(flow, material, cfg, seed, k);
-    let mut v = root_mean_square(&draws);
-    for _ in 0..cfg.iterations {
-        descend(&mut v, &draws, cfg.floor);
-    }
-    let total = integral(&v);
-    let values: Vec<f32> = v
-        .iter()
+/// A slice's stored node values: the fitted surface `v` normalised to integral 1, mixed
+/// with the uniform density (`cfg.floor`) and rounded to the stored codes.
+fn stored_values(v: &[f64], cfg: &TableConfig) -> Vec<f32> {
+    let total = integral(v);
+    v.iter()
         .map(|&x| {
             let shaped = if total > 0.0 { x / total } else { 1.0 };
             let mixed = (1.0 - cfg.floor) * shaped + cfg.floor;
             stored_value(mixed)
         })
-        .collect();
-    let stored: Vec<f64> = values.iter().map(|&x| f64::from(x)).collect();
-    let fit = TableFit {
-        rv_flow: relative_variance(&draws, None),
-        rv_table: relative_variance(&draws, Some(&stored)),
+        .collect()
+}
+
+/// The density the kernel evaluates for a draw from the stored slices: its two slices'
+/// bilinear surfaces mixed (docs/math.md, (75)).
+fn mixed_density(d: &SliceDraw, stored: &[Vec<f32>]) -> f64 {
+    let at = |k: usize| -> f64 {
+        d.corners()
+            .iter()
+            .map(|&(n, w)| w * f64::from(stored[k][n]))
+            .sum()
     };
-    (values, fit)
+    (1.0 - d.t) * at(d.lo) + d.t * at(d.lo + 1)
 }
 
 /// The node value the blob stores for `x`: its nearest code's value, within the codes'
@@ -196,17 +222,13 @@ fn stored_value(x: f64) -> f32 {
     encode(clamped).map_or(clamped, code_value_f32)
 }
 
-/// `E[q^2 / T] / E[q]^2 - 1` over the draws, `T` the normalised bilinear surface of the
-/// node values `v` (the uniform density for `None`); 0 where every weight is 0.
-fn relative_variance(draws: &[SliceDraw], v: Option<&[f64]>) -> f64 {
-    let total = v.map_or(1.0, integral);
+/// `E[q^2 / T] / E[q]^2 - 1` over the draws, `T` the density `density` gives a draw (1:
+/// the flow alone); 0 where every weight is 0.
+fn relative_variance(draws: &[SliceDraw], density: impl Fn(&SliceDraw) -> f64) -> f64 {
     let (mut first, mut second) = (0.0, 0.0);
     for d in draws {
-        let t = v.map_or(1.0, |v| {
-            d.corners().iter().map(|&(n, w)| w * v[n]).sum::<f64>() / total
-        });
         first += d.q2.sqrt();
-        second += d.q2 / t;
+        second += d.q2 / density(d);
     }
     if first > 0.0 {
         draws.len() as f64 * second / (first * first) - 1.0
@@ -233,15 +255,18 @@ fn slice_draws(
     let mut draws = Vec::with_capacity(cfg.draws_per_slice);
     let mut incidences = Vec::with_capacity(BATCH);
     let mut points = Vec::with_capacity(BATCH);
+    let mut mix = Vec::with_capacity(BATCH);
     let mut samples = vec![Sample::INVALID; BATCH];
     while draws.len() < cfg.draws_per_slice {
         let n = BATCH.min(cfg.draws_per_slice - draws.len());
         incidences.clear();
         points.clear();
+        mix.clear();
         for _ in 0..n {
-            let (wi, u) = slice_point(&mut rng, k, isotropic);
+            let (wi, u, m) = slice_point(&mut rng, k, isotropic);
             incidences.push(wi);
             points.push(u);
+            mix.push(m);
         }
         let wi: Vec<Vec3> = incidences.iter().map(|&w| to_glam(w)).collect();
         let u: Vec<Vec2> = points
@@ -252,7 +277,7 @@ fn slice_draws(
         if sample_batch(flow, &wi, &u, 0, out).is_err() {
             out.fill(Sample::INVALID);
         }
-        for ((&wi, u), s) in incidences.iter().zip(&points).zip(out.iter()) {
+        for (((&wi, u), s), (lo, t)) in incidences.iter().zip(&points).zip(out.iter()).zip(&mix) {
             let drawn = s.is_valid().then(|| Drawn {
                 wo: from_glam(s.wo),
                 pdf: f64::from(s.pdf),
@@ -265,6 +290,8 @@ fn slice_draws(
                 a: x - i as f64,
                 b: y - j as f64,
                 q2: q * q,
+                lo: *lo,
+                t: *t,
             });
         }
     }
@@ -273,7 +300,7 @@ fn slice_draws(
 
 /// One draw's incidence (from slice `k`'s hat in incidence, reflected at the ends) and its
 /// uniform `u`.
-fn slice_point(rng: &mut Pcg64, k: usize, isotropic: bool) -> (DVec3, [f64; 2]) {
+fn slice_point(rng: &mut Pcg64, k: usize, isotropic: bool) -> (DVec3, [f64; 2], (usize, f64)) {
     let s = k as f64 + rng.gen::<f64>() - rng.gen::<f64>();
     let s = (s.abs()).min(2.0 * (S - 1) as f64 - s.abs());
     let z = slice_incidence(s).max(1e-4);
@@ -284,7 +311,8 @@ fn slice_point(rng: &mut Pcg64, k: usize, isotropic: bool) -> (DVec3, [f64; 2]) 
     };
     let r = (1.0 - z * z).max(0.0).sqrt();
     let wi = DVec3::new(r * phi.cos(), r * phi.sin(), z);
-    (wi, [rng.gen::<f64>(), rng.gen::<f64>()])
+    let (lo, t) = slice_pair(z as f32);
+    (wi, [rng.gen::<f64>(), rng.gen::<f64>()], (lo, f64::from(t)))
 }
 
 /// The root of the bilinearly weighted mean of `q^2` around each node: the least
@@ -342,6 +370,63 @@ fn descend(v: &mut [f64], draws: &[SliceDraw], floor: f64) {
     }
 }
 
+/// One joint update of every slice's node values `v_k` (the second of each pair; the first
+/// the slice's draws) towards the least `E[q^2 / T]` over all draws, `T` the density the
+/// kernel evaluates at each draw's incidence, its two slices mixed:
+/// `T = (1 - f) ((1 - t) B_lo / I_lo + t B_hi / I_hi) + f` (docs/math.md, (80)). At the
+/// minimum, for every node `n` of slice `k`, `I_k E[m_k q^2 w_n / T^2] = c_n E[m_k q^2 B_k
+/// / T^2]` with `m_k` the draw's weight of slice `k` (`1 - t` or `t`, 0 where it does not
+/// mix `k`), so each value is multiplied by the square root of that ratio, every slice
+/// from the same current values. A draw of slice `k`'s hat mixes `k` and a neighbour, so
+/// the update of `k` reads the draws of `k - 1 ..= k + 1`.
+fn joint_descend(per: &mut [(Vec<SliceDraw>, Vec<f64>)], floor: f64) {
+    let totals: Vec<f64> = per.iter().map(|p| integral(&p.1)).collect();
+    let updated: Vec<Vec<f64>> = (0..S)
+        .into_par_iter()
+        .map(|k| {
+            let mut toward = vec![0.0f64; SLICE_LEN];
+            let mut whole = 0.0;
+            for g in k.saturating_sub(1)..=(k + 1).min(S - 1) {
+                for d in &per[g].0 {
+                    let (lo, hi) = (d.lo, d.lo + 1);
+                    if lo != k && hi != k {
+                        continue;
+                    }
+                    let corners = d.corners();
+                    let b_lo: f64 = corners.iter().map(|&(n, w)| w * per[lo].1[n]).sum();
+                    let b_hi: f64 = corners.iter().map(|&(n, w)| w * per[hi].1[n]).sum();
+                    let t = (1.0 - floor)
+                        * ((1.0 - d.t) * b_lo / totals[lo] + d.t * b_hi / totals[hi])
+                        + floor;
+                    let r = d.q2 / (t * t);
+                    let (m, b) = if lo == k {
+                        (1.0 - d.t, b_lo)
+                    } else {
+                        (d.t, b_hi)
+                    };
+                    for (n, w) in corners {
+                        toward[n] += r * m * w;
+                    }
+                    whole += r * m * b;
+                }
+            }
+            let mut v = per[k].1.clone();
+            if whole > 0.0 {
+                for (n, x) in v.iter_mut().enumerate() {
+                    let ratio = toward[n] * totals[k] / (node_weight(n) * whole);
+                    if ratio > 0.0 {
+                        *x *= ratio.sqrt();
+                    }
+                }
+            }
+            v
+        })
+        .collect();
+    for (p, v) in per.iter_mut().zip(updated) {
+        p.1 = v;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -371,6 +456,8 @@ mod tests {
                     a: x - i as f64,
                     b: y - j as f64,
                     q2: 0.0,
+                    lo: 0,
+                    t: 0.0,
                 };
                 let q: f64 = d.corners().iter().map(|&(n, w)| w * g[n]).sum();
                 d.q2 = q * q;
@@ -440,5 +527,78 @@ mod tests {
         let end = second_moment(&v, &draws, 0.05);
         assert!(end < start, "{end} vs {start}");
         assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0));
+    }
+
+    /// `E[q^2 / T]` over every slice's draws with `T` the two slices mixed as in
+    /// [`joint_descend`] (the values unrounded).
+    fn joint_moment(per: &[(Vec<SliceDraw>, Vec<f64>)], floor: f64) -> f64 {
+        let totals: Vec<f64> = per.iter().map(|p| integral(&p.1)).collect();
+        let (mut sum, mut count) = (0.0, 0);
+        for (draws, _) in per {
+            for d in draws {
+                let at = |k: usize| -> f64 {
+                    d.corners()
+                        .iter()
+                        .map(|&(n, w)| w * per[k].1[n])
+                        .sum::<f64>()
+                        / totals[k]
+                };
+                let t = (1.0 - floor) * ((1.0 - d.t) * at(d.lo) + d.t * at(d.lo + 1)) + floor;
+                sum += d.q2 / t;
+                count += 1;
+            }
+        }
+        sum / count as f64
+    }
+
+    /// The joint updates lower the second moment of the mixed density at every step, from
+    /// the slices fitted on their own, where the weight's shape moves across the slices
+    /// (so that a slice fitted alone to its hat is not the best mix at any incidence).
+    #[test]
+    fn joint_updates_lower_the_mixed_moment() {
+        let mut rng = Pcg64::seed_from_u64(9);
+        let per: Vec<(Vec<SliceDraw>, Vec<f64>)> = (0..S)
+            .map(|k| {
+                let draws: Vec<SliceDraw> = (0..4000)
+                    .map(|_| {
+                        let s = k as f64 + rng.gen::<f64>() - rng.gen::<f64>();
+                        let s = s.abs().min(2.0 * (S - 1) as f64 - s.abs());
+                        let lo = (s as usize).min(S - 2);
+                        let (x, y) = (rng.gen::<f64>() * C as f64, rng.gen::<f64>() * C as f64);
+                        let (i, j) = ((x as usize).min(C - 1), (y as usize).min(C - 1));
+                        // A peak whose place in `u` moves with the incidence.
+                        let centre = s / (S - 1) as f64 * C as f64;
+                        let q =
+                            0.2 + 10.0 * (-((x - centre).powi(2) + (y - 8.0).powi(2)) / 8.0).exp();
+                        SliceDraw {
+                            node: i * NODES + j,
+                            a: x - i as f64,
+                            b: y - j as f64,
+                            q2: q * q,
+                            lo,
+                            t: s - lo as f64,
+                        }
+                    })
+                    .collect();
+                let mut v = root_mean_square(&draws);
+                for _ in 0..20 {
+                    descend(&mut v, &draws, 0.05);
+                }
+                (draws, v)
+            })
+            .collect();
+        let mut per = per;
+        let mut last = joint_moment(&per, 0.05);
+        let start = last;
+        for step in 0..5 {
+            joint_descend(&mut per, 0.05);
+            let now = joint_moment(&per, 0.05);
+            assert!(now < last, "step {step}: {now} after {last}");
+            last = now;
+        }
+        assert!(last < 0.99 * start, "{start} -> {last}");
+        assert!(per
+            .iter()
+            .all(|p| p.1.iter().all(|x| x.is_finite() && *x >= 0.0)));
     }
 }

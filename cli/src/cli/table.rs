@@ -32,6 +32,10 @@ pub struct TableArgs {
     /// root-mean-square start (docs/math.md, (78); 0: the start alone).
     #[arg(long, default_value_t = TableConfig::DEFAULT.iterations)]
     pub iterations: usize,
+    /// Joint updates of every slice after those, against the two slices the kernel mixes
+    /// at each incidence (docs/math.md, (80); 0: each slice on its own).
+    #[arg(long, default_value_t = TableConfig::DEFAULT.joint_iterations)]
+    pub joint_iterations: usize,
     /// Seed of the draws.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -46,6 +50,7 @@ pub fn run(args: TableArgs, out: &mut dyn std::io::Write) -> Result<(), CommandE
         draws_per_slice: args.draws,
         floor: f64::from(args.floor),
         iterations: args.iterations,
+        joint_iterations: args.joint_iterations,
     };
     let start = Instant::now();
     let (tabled, fit) = fit_latent_table(&model, material.as_ref(), &cfg, args.seed)?;
