@@ -113,12 +113,16 @@ pub fn fit_latent_table(
         joint_descend(&mut per, cfg.floor);
     }
     let stored: Vec<Vec<f32>> = per.iter().map(|(_, v)| stored_values(v, cfg)).collect();
+    let stored_f64: Vec<Vec<f64>> = stored
+        .iter()
+        .map(|v| v.iter().map(|&x| f64::from(x)).collect())
+        .collect();
     let slices: Vec<(Vec<f32>, TableFit)> = (0..S)
         .into_par_iter()
         .map(|k| {
             let fit = TableFit {
                 rv_flow: relative_variance(&per[k].0, |_| 1.0),
-                rv_table: relative_variance(&per[k].0, |d| mixed_density(d, &stored)),
+                rv_table: relative_variance(&per[k].0, |d| mixed_density(d, &stored_f64)),
             };
             (stored[k].clone(), fit)
         })
@@ -155,6 +159,7 @@ pub fn without_table(model: &AnyModel) -> Result<AnyModel, TrainError> {
 
 /// One draw of a slice: the node of its cell's lower corner, its place in the cell and
 /// the flow's squared weight.
+#[derive(Clone)]
 struct SliceDraw {
     node: usize,
     a: f64,
@@ -176,6 +181,21 @@ impl SliceDraw {
             (n + NODES + 1, a * b),
         ]
     }
+
+    /// The bilinear surface of the node values `v` at the draw.
+    fn surface(&self, v: &[f64]) -> f64 {
+        self.corners().iter().map(|&(n, w)| w * v[n]).sum()
+    }
+}
+
+/// A slice's surface value `b` as a density: divided by its integral `total`, the uniform
+/// density where the slice has none (as [`stored_values`] stores it).
+fn shaped(b: f64, total: f64) -> f64 {
+    if total > 0.0 {
+        b / total
+    } else {
+        1.0
+    }
 }
 
 /// The node's weight in the bilinear surface's integral over the unit square: the
@@ -194,24 +214,14 @@ fn integral(v: &[f64]) -> f64 {
 fn stored_values(v: &[f64], cfg: &TableConfig) -> Vec<f32> {
     let total = integral(v);
     v.iter()
-        .map(|&x| {
-            let shaped = if total > 0.0 { x / total } else { 1.0 };
-            let mixed = (1.0 - cfg.floor) * shaped + cfg.floor;
-            stored_value(mixed)
-        })
+        .map(|&x| stored_value((1.0 - cfg.floor) * shaped(x, total) + cfg.floor))
         .collect()
 }
 
 /// The density the kernel evaluates for a draw from the stored slices: its two slices'
 /// bilinear surfaces mixed (docs/math.md, (75)).
-fn mixed_density(d: &SliceDraw, stored: &[Vec<f32>]) -> f64 {
-    let at = |k: usize| -> f64 {
-        d.corners()
-            .iter()
-            .map(|&(n, w)| w * f64::from(stored[k][n]))
-            .sum()
-    };
-    (1.0 - d.t) * at(d.lo) + d.t * at(d.lo + 1)
+fn mixed_density(d: &SliceDraw, stored: &[Vec<f64>]) -> f64 {
+    (1.0 - d.t) * d.surface(&stored[d.lo]) + d.t * d.surface(&stored[d.lo + 1])
 }
 
 /// The node value the blob stores for `x`: its nearest code's value, within the codes'
@@ -350,11 +360,10 @@ fn descend(v: &mut [f64], draws: &[SliceDraw], floor: f64) {
     let mut toward = vec![0.0f64; SLICE_LEN];
     let mut whole = 0.0;
     for d in draws {
-        let corners = d.corners();
-        let b: f64 = corners.iter().map(|&(n, w)| w * v[n]).sum();
+        let b = d.surface(v);
         let t = (1.0 - floor) * b / total + floor;
         let r = d.q2 / (t * t);
-        for (n, w) in corners {
+        for (n, w) in d.corners() {
             toward[n] += r * w;
         }
         whole += r * b;
@@ -392,11 +401,9 @@ fn joint_descend(per: &mut [(Vec<SliceDraw>, Vec<f64>)], floor: f64) {
                     if lo != k && hi != k {
                         continue;
                     }
-                    let corners = d.corners();
-                    let b_lo: f64 = corners.iter().map(|&(n, w)| w * per[lo].1[n]).sum();
-                    let b_hi: f64 = corners.iter().map(|&(n, w)| w * per[hi].1[n]).sum();
+                    let (b_lo, b_hi) = (d.surface(&per[lo].1), d.surface(&per[hi].1));
                     let t = (1.0 - floor)
-                        * ((1.0 - d.t) * b_lo / totals[lo] + d.t * b_hi / totals[hi])
+                        * ((1.0 - d.t) * shaped(b_lo, totals[lo]) + d.t * shaped(b_hi, totals[hi]))
                         + floor;
                     let r = d.q2 / (t * t);
                     let (m, b) = if lo == k {
@@ -404,14 +411,15 @@ fn joint_descend(per: &mut [(Vec<SliceDraw>, Vec<f64>)], floor: f64) {
                     } else {
                         (d.t, b_hi)
                     };
-                    for (n, w) in corners {
+                    for (n, w) in d.corners() {
                         toward[n] += r * m * w;
                     }
                     whole += r * m * b;
                 }
             }
             let mut v = per[k].1.clone();
-            if whole > 0.0 {
+            // A slice with no mass stays uniform (its stored density).
+            if whole > 0.0 && totals[k] > 0.0 {
                 for (n, x) in v.iter_mut().enumerate() {
                     let ratio = toward[n] * totals[k] / (node_weight(n) * whole);
                     if ratio > 0.0 {
@@ -437,7 +445,7 @@ mod tests {
         let sum: f64 = draws
             .iter()
             .map(|d| {
-                let b: f64 = d.corners().iter().map(|&(n, w)| w * v[n]).sum();
+                let b = d.surface(v);
                 d.q2 / ((1.0 - floor) * b / total + floor)
             })
             .sum();
@@ -459,7 +467,7 @@ mod tests {
                     lo: 0,
                     t: 0.0,
                 };
-                let q: f64 = d.corners().iter().map(|&(n, w)| w * g[n]).sum();
+                let q = d.surface(g);
                 d.q2 = q * q;
                 d
             })
@@ -495,11 +503,8 @@ mod tests {
         // exactly for any T (mean(T) is 1 only up to the draws' noise, which the 1 089
         // nodes of the grid can fit).
         let total = integral(&v);
-        let mean_t: f64 = draws
-            .iter()
-            .map(|d| d.corners().iter().map(|&(n, w)| w * v[n]).sum::<f64>() / total)
-            .sum::<f64>()
-            / draws.len() as f64;
+        let mean_t: f64 =
+            draws.iter().map(|d| d.surface(&v) / total).sum::<f64>() / draws.len() as f64;
         assert!(
             moment * mean_t >= bound * (1.0 - 1e-12),
             "{moment} x {mean_t} vs {bound}"
@@ -588,6 +593,19 @@ mod tests {
             })
             .collect();
         let mut per = per;
+        // A slice whose flow draws nothing (every weight 0) stays finite and leaves its
+        // neighbours' updates finite.
+        let mut empty = per.clone();
+        for d in empty[5].0.iter_mut() {
+            d.q2 = 0.0;
+        }
+        empty[5].1 = root_mean_square(&empty[5].0);
+        joint_descend(&mut empty, 0.05);
+        assert!(empty.iter().all(|p| p.1.iter().all(|x| x.is_finite())));
+        assert_eq!(
+            stored_values(&empty[5].1, &TableConfig::DEFAULT)[0],
+            stored_value(1.0)
+        );
         let mut last = joint_moment(&per, 0.05);
         let start = last;
         for step in 0..5 {
