@@ -86,9 +86,9 @@ fn expected_kind(offset: usize, err: &BlobError) -> bool {
                 | BlobError::Truncated { .. }
                 | BlobError::TrailingBytes { .. }
         ),
-        // parameter count, and the flags' latent-table bits 4 and 5: another length (or an
-        // overflow, a count below the table's, or bit 5 without bit 4); the other flag bits
-        // are checked behind the checksum
+        // parameter count, and the flags' latent-table bits 4, 5 and 6: another length (or
+        // an overflow, a count below the table's, bit 5 without bit 4 or bit 6 without bit
+        // 5); the other flag bits are checked behind the checksum
         24..=28 => matches!(
             err,
             BlobError::Truncated { .. }
@@ -331,6 +331,41 @@ fn coded_table_round_trips_and_refuses_what_no_code_holds() {
     );
     let mut b = blob_of(&m, Precision::F32);
     b[28] &= !16;
+    reseal(&mut b);
+    assert!(matches!(
+        Model3x32::from_blob(&b),
+        Err(BlobError::BadHeader(_))
+    ));
+}
+
+/// The coded table with its axis warps (flag bits 4, 5 and 6, docs/math.md, (81)): `2 x
+/// 33` more codes after the slices', a round trip bit-exact in either precision, an axis
+/// node outside the codes' range a `TableValueOutOfRange` at its index, bit 6 without bit
+/// 5 a header error.
+#[test]
+fn warped_table_round_trips_and_refuses_bad_axis_nodes() {
+    let m = random_table_model(8, TableGrid::WarpedCodes);
+    let def = *m.def();
+    let first_table = def.param_count() - def.table_len();
+    assert_eq!(def.table_len(), 32 * 33 * 33 + 2 * 33);
+    for precision in [Precision::F32, Precision::F16] {
+        let bytes = blob_of(&m, precision);
+        assert_eq!(bytes[28] & 112, 112);
+        let len = HEADER_LEN + first_table * precision.bytes() + def.table_len() + CHECKSUM_LEN;
+        assert_eq!(bytes.len(), len, "{precision:?}");
+        let back = Model3x32::from_blob(&bytes).unwrap();
+        assert_eq!(back.def().latent_table, Some(TableGrid::WarpedCodes));
+        assert_eq!(blob_of(&back, precision), bytes, "{precision:?} round trip");
+    }
+    let index = def.param_count() - 5;
+    let mut p = params_of(&m);
+    p[index] = 1e-3;
+    assert_eq!(
+        Model3x32::from_params(def, &p).unwrap_err(),
+        BlobError::TableValueOutOfRange { index }
+    );
+    let mut b = blob_of(&m, Precision::F32);
+    b[28] &= !32;
     reseal(&mut b);
     assert!(matches!(
         Model3x32::from_blob(&b),

@@ -60,6 +60,11 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
         "tiny half vector table",
         Some(TableGrid::Codes),
     );
+    let axes_table = tiny_with_table(
+        Domain::HalfVector,
+        "tiny half vector axes",
+        Some(TableGrid::WarpedCodes),
+    );
     let opt = |language, float, weights, entry_points| Options {
         language,
         float,
@@ -142,6 +147,12 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
             "half_vector_table_buffer.wgsl",
             table,
             opt(Language::Wgsl, Float::F32, buf, EntryPoints::ALL),
+        ),
+        // with its axis warps (docs/math.md, (81)), as the trainer writes it
+        (
+            "half_vector_axes_table_buffer.glsl",
+            axes_table,
+            opt(Language::Glsl, Float::F32, buf, EntryPoints::ALL),
         ),
         (
             "half_vector_all_f16_fused.wgsl",

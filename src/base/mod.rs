@@ -10,6 +10,7 @@
 pub mod gaussian;
 mod standard;
 pub mod table;
+pub mod table_axes;
 pub mod warp;
 pub mod wrapped_cauchy;
 

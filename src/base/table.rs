@@ -13,6 +13,7 @@
 //! Every formula is a sum, a product, a division or a square root, written as the generated
 //! GLSL, WGSL and C write it.
 
+use super::table_axes;
 use crate::def::Precision;
 use crate::math::{ln, sqrt};
 use crate::spec::{
@@ -28,8 +29,12 @@ pub enum TableGrid {
     /// precision (flag bit 4 alone: blobs written before the coded table).
     Values,
     /// [`LATENT_TABLE_CELLS`] (32) cells per side, each node an 8-bit code of its value
-    /// ([`code_value`]; flag bits 4 and 5). What the trainer writes.
+    /// ([`code_value`]; flag bits 4 and 5; the blobs written before the axis warps).
     Codes,
+    /// The coded grid with its two axis warps (`crate::base::table_axes`, docs/math.md,
+    /// (81)): after the slices' nodes, `2 (C + 1)` more codes, the nodes of `g_0` then
+    /// `g_1` (flag bits 4, 5 and 6). What the trainer writes.
+    WarpedCodes,
 }
 
 impl TableGrid {
@@ -38,8 +43,20 @@ impl TableGrid {
     pub const fn cells(self) -> usize {
         match self {
             TableGrid::Values => LATENT_TABLE_VALUE_CELLS,
-            TableGrid::Codes => LATENT_TABLE_CELLS,
+            TableGrid::Codes | TableGrid::WarpedCodes => LATENT_TABLE_CELLS,
         }
+    }
+
+    /// Whether each node is an 8-bit code.
+    #[must_use]
+    pub const fn is_coded(self) -> bool {
+        matches!(self, TableGrid::Codes | TableGrid::WarpedCodes)
+    }
+
+    /// Whether the grid's axes are warped (docs/math.md, (81)).
+    #[must_use]
+    pub const fn is_warped(self) -> bool {
+        matches!(self, TableGrid::WarpedCodes)
     }
 
     /// Nodes per side: `cells + 1`.
@@ -55,10 +72,21 @@ impl TableGrid {
     }
 
     /// Nodes of the whole table, slice after slice (slice 0 at normal incidence), each
-    /// row-major in `(i, j)`, `i` along `u_0`: the blob's order.
+    /// row-major in `(i, j)`, `i` along `u_0`, then on a warped grid the axis warps'
+    /// [`Self::axis_len`]: the blob's order.
     #[must_use]
     pub const fn node_count(self) -> usize {
-        S * self.slice_len()
+        S * self.slice_len() + self.axis_len()
+    }
+
+    /// Nodes of the axis warps, `g_0` then `g_1`, `C + 1` each (0 where the grid has none).
+    #[must_use]
+    pub const fn axis_len(self) -> usize {
+        if self.is_warped() {
+            2 * self.nodes()
+        } else {
+            0
+        }
     }
 
     /// Bytes one node takes in a blob of `precision`.
@@ -66,17 +94,17 @@ impl TableGrid {
     pub const fn node_bytes(self, precision: Precision) -> usize {
         match self {
             TableGrid::Values => precision.bytes(),
-            TableGrid::Codes => 1,
+            TableGrid::Codes | TableGrid::WarpedCodes => 1,
         }
     }
 }
 
 /// Nodes per side of the finest grid.
-const MAX_NODES: usize = LATENT_TABLE_CELLS + 1;
+pub const MAX_NODES: usize = LATENT_TABLE_CELLS + 1;
 
 /// Bytes that hold either grid's nodes: one code per node, or four bytes of f32 per node.
 const STORE_LEN: usize = {
-    let codes = S * MAX_NODES * MAX_NODES;
+    let codes = S * MAX_NODES * MAX_NODES + 2 * MAX_NODES;
     let values = S * (LATENT_TABLE_VALUE_CELLS + 1) * (LATENT_TABLE_VALUE_CELLS + 1) * 4;
     if codes > values {
         codes
@@ -141,6 +169,12 @@ pub struct LatentTable {
     /// `(C + 1)` of them instead of summing 2 x `(C + 1)^2` nodes. The generated code sums
     /// them per call in the same order, so both hold the same bits.
     columns: [f32; S * MAX_NODES],
+    /// The axis warps' nodes `g_0`, `g_1` (docs/math.md, (81)); every node 1 (the identity)
+    /// where the grid has none.
+    axes: [[f32; MAX_NODES]; 2],
+    /// `sum_i w_i g_a[i]` per axis, derived by [`LatentTable::prepare`] in the order the
+    /// generated code sums them.
+    axis_totals: [f32; 2],
 }
 
 /// The two slices a `wi` mixes: `k` and `k + 1`, the second with weight `t`.
@@ -193,7 +227,7 @@ pub fn trapezoid(i: usize, cells: usize) -> f32 {
 
 /// The cell of `x` in `[0, C]` and the position in it: `(min(floor(x), C - 1), x - cell)`.
 #[inline(always)]
-fn cell(x: f32, cells: usize) -> (usize, f32) {
+pub(crate) fn cell(x: f32, cells: usize) -> (usize, f32) {
     let i = (x.max(0.0) as usize).min(cells - 1);
     (i, x - i as f32)
 }
@@ -213,7 +247,7 @@ fn cell_fraction(lo: f32, hi: f32, r: f32) -> f32 {
 /// first reaches `u` times the total, then [`cell_fraction`] in it; returns the point in
 /// `[0, 1]`.
 #[inline(always)]
-fn invert_linear(m: &[f32; MAX_NODES], cells: usize, total: f32, u: f32) -> f32 {
+pub(crate) fn invert_linear(m: &[f32; MAX_NODES], cells: usize, total: f32, u: f32) -> f32 {
     let mut r = u * total;
     let mut i = 0;
     while i + 1 < cells {
@@ -231,7 +265,7 @@ fn invert_linear(m: &[f32; MAX_NODES], cells: usize, total: f32, u: f32) -> f32 
 /// `sum_i w_i m_i` over the first `cells + 1` entries: `C^2` times the integral of the
 /// mixed bilinear surface.
 #[inline(always)]
-fn total(m: &[f32; MAX_NODES], cells: usize) -> f32 {
+pub fn total(m: &[f32; MAX_NODES], cells: usize) -> f32 {
     let mut sum = 0.0;
     for (i, mi) in m.iter().take(cells + 1).enumerate() {
         sum += trapezoid(i, cells) * mi;
@@ -266,6 +300,8 @@ impl LatentTable {
         store: [LATENT_TABLE_CODE_ONE; STORE_LEN],
         code_values: CODE_VALUES_F32,
         columns: [LATENT_TABLE_CELLS as f32; S * MAX_NODES],
+        axes: [[1.0; MAX_NODES]; 2],
+        axis_totals: [LATENT_TABLE_CELLS as f32; 2],
     };
 
     /// Cells per side.
@@ -278,7 +314,7 @@ impl LatentTable {
     #[inline(always)]
     fn value(&self, n: usize) -> f32 {
         match self.grid {
-            TableGrid::Codes => self
+            TableGrid::Codes | TableGrid::WarpedCodes => self
                 .store
                 .get(n)
                 .map_or(1.0, |&c| self.code_values[usize::from(c)]),
@@ -296,7 +332,7 @@ impl LatentTable {
     pub(crate) fn accepts(grid: TableGrid, value: f32) -> bool {
         match grid {
             TableGrid::Values => value > 0.0 && value <= LATENT_TABLE_VALUE_MAX,
-            TableGrid::Codes => encode(value).is_some(),
+            TableGrid::Codes | TableGrid::WarpedCodes => encode(value).is_some(),
         }
     }
 
@@ -312,7 +348,7 @@ impl LatentTable {
         self.grid = grid;
         self.code_values = code_values(precision);
         match grid {
-            TableGrid::Codes => {
+            TableGrid::Codes | TableGrid::WarpedCodes => {
                 for c in self.store.iter_mut().take(grid.node_count()) {
                     *c = encode(next()).unwrap_or(LATENT_TABLE_CODE_ONE);
                 }
@@ -326,9 +362,20 @@ impl LatentTable {
         self.prepare();
     }
 
-    /// Derives the column integrals from the nodes.
+    /// Derives the column integrals and the axis warps from the nodes.
     fn prepare(&mut self) {
         let (cells, nodes) = (self.cells(), self.grid.nodes());
+        let first_axis = S * self.grid.slice_len();
+        for a in 0..2 {
+            for i in 0..MAX_NODES {
+                self.axes[a][i] = if self.grid.is_warped() && i < nodes {
+                    self.value(first_axis + a * nodes + i)
+                } else {
+                    1.0
+                };
+            }
+            self.axis_totals[a] = total(&self.axes[a], cells);
+        }
         for k in 0..S {
             for i in 0..nodes {
                 let first = k * self.grid.slice_len() + i * nodes;
@@ -378,7 +425,15 @@ impl LatentTable {
             *qj = (1.0 - a) * self.node(sl, i, j) + a * self.node(sl, i + 1, j);
         }
         let x1 = invert_linear(&q, cells, total(&q, cells), u[1]);
-        [x0, x1]
+        if self.grid.is_warped() {
+            // Then through the axis warps (docs/math.md, (81)).
+            let w = |a: usize, x: f32| {
+                table_axes::forward(&self.axes[a], cells, self.axis_totals[a], x)
+            };
+            [w(0, x0), w(1, x1)]
+        } else {
+            [x0, x1]
+        }
     }
 
     /// `ln` of the table's density at `x` in `[0, 1]^2` (docs/math.md, (74)): the mixed
@@ -387,13 +442,36 @@ impl LatentTable {
     #[must_use]
     pub(crate) fn ln_density(&self, sl: TableSlice, x: [f32; 2]) -> f32 {
         let cells = self.cells();
+        if self.grid.is_warped() {
+            // The table's point is w^-1 of x, and the warps' slopes divide (81).
+            let axis = |a: usize| {
+                let (g, t) = (&self.axes[a], self.axis_totals[a]);
+                let back = table_axes::inverse(g, cells, t, x[a]);
+                (back, table_axes::slope(g, cells, t, back))
+            };
+            let ((x0, s0), (x1, s1)) = (axis(0), axis(1));
+            return self.ln_density_on_grid(sl, [x0, x1], s0 * s1);
+        }
+        self.ln_density_on_grid(sl, x, 1.0)
+    }
+
+    /// `ln` of the bilinear density at the table's point `x`, over `stretch` (the axis
+    /// warps' slopes; 1, dividing nothing, without them).
+    #[inline(always)]
+    fn ln_density_on_grid(&self, sl: TableSlice, x: [f32; 2], stretch: f32) -> f32 {
+        let cells = self.cells();
         let m = self.columns(sl);
         let (i, a) = cell(x[0] * cells as f32, cells);
         let (j, b) = cell(x[1] * cells as f32, cells);
         let lo = (1.0 - b) * self.node(sl, i, j) + b * self.node(sl, i, j + 1);
         let hi = (1.0 - b) * self.node(sl, i + 1, j) + b * self.node(sl, i + 1, j + 1);
         let bilinear = (1.0 - a) * lo + a * hi;
-        ln(bilinear * (cells * cells) as f32 / total(&m, cells))
+        let density = bilinear * (cells * cells) as f32 / total(&m, cells);
+        if self.grid.is_warped() {
+            ln(density / stretch)
+        } else {
+            ln(density)
+        }
     }
 
     /// The node values in blob order (a code's value at the model's precision).
@@ -422,7 +500,7 @@ mod tests {
         t
     }
 
-    const GRIDS: [TableGrid; 2] = [TableGrid::Codes, TableGrid::Values];
+    const GRIDS: [TableGrid; 3] = [TableGrid::Codes, TableGrid::Values, TableGrid::WarpedCodes];
 
     fn density(t: &LatentTable, sl: TableSlice, x: [f32; 2]) -> f64 {
         f64::from(t.ln_density(sl, x)).exp()

@@ -100,7 +100,7 @@ impl<'a> Blob<'a> {
             .chunks_exact(precision.bytes())
             .map(move |c| decode(c, precision));
         let table = table.chunks_exact(node_bytes).map(move |c| match grid {
-            Some(TableGrid::Codes) => code_value(c[0], precision),
+            Some(g) if g.is_coded() => code_value(c[0], precision),
             _ => decode(c, precision),
         });
         nets.chain(table)
@@ -108,7 +108,7 @@ impl<'a> Blob<'a> {
 
     fn check_values(&self) -> Result<(), BlobError> {
         let first_table = self.def.param_count() - self.def.table_len();
-        if self.def.latent_table == Some(TableGrid::Codes) {
+        if self.def.latent_table.is_some_and(TableGrid::is_coded) {
             // Code 0 stands for no value (docs/blob-format.md).
             let codes = self.weights.get(first_table * self.def.precision.bytes()..);
             if let Some(at) = codes.and_then(|c| c.iter().position(|&c| c == 0)) {
@@ -205,17 +205,23 @@ impl RawHeader {
         })
     }
 
-    /// The latent table's grid from flag bits 4 and 5 (bit 5 without bit 4 is an error).
+    /// The latent table's grid from flag bits 4, 5 and 6 (bit 5 without bit 4, or bit 6
+    /// without bit 5, is an error).
     fn table_grid(&self) -> Result<Option<TableGrid>, BlobError> {
         match (
             self.flags & FLAG_LATENT_TABLE != 0,
             self.flags & FLAG_CODED_TABLE != 0,
+            self.flags & FLAG_WARPED_TABLE != 0,
         ) {
-            (false, false) => Ok(None),
-            (true, false) => Ok(Some(TableGrid::Values)),
-            (true, true) => Ok(Some(TableGrid::Codes)),
-            (false, true) => Err(BlobError::BadHeader(
+            (false, false, false) => Ok(None),
+            (true, false, false) => Ok(Some(TableGrid::Values)),
+            (true, true, false) => Ok(Some(TableGrid::Codes)),
+            (true, true, true) => Ok(Some(TableGrid::WarpedCodes)),
+            (false, true, _) => Err(BlobError::BadHeader(
                 "a coded latent table without a latent table",
+            )),
+            (_, false, true) => Err(BlobError::BadHeader(
+                "warped axes without a coded latent table",
             )),
         }
     }
@@ -229,7 +235,8 @@ impl RawHeader {
             | FLAG_STANDARDIZED
             | FLAG_STANDARD_WARP
             | FLAG_LATENT_TABLE
-            | FLAG_CODED_TABLE;
+            | FLAG_CODED_TABLE
+            | FLAG_WARPED_TABLE;
         if self.flags & !known != 0 {
             return Err(BlobError::BadHeader("unknown flag bits are set"));
         }
@@ -315,6 +322,10 @@ pub(crate) const FLAG_LATENT_TABLE: u32 = 16;
 /// stores each node as an 8-bit code ([`TableGrid::Codes`]; only with
 /// [`FLAG_LATENT_TABLE`]).
 pub(crate) const FLAG_CODED_TABLE: u32 = 32;
+/// Header flag: the coded latent table's axes are warped, their nodes stored after the
+/// slices' ([`TableGrid::WarpedCodes`], docs/math.md, (81); only with
+/// [`FLAG_CODED_TABLE`]).
+pub(crate) const FLAG_WARPED_TABLE: u32 = 64;
 /// Header flag: the model is defined for `wi` above the surface only
 /// ([`IncidentRange::UpperHemisphere`]); implied on the disk, written there too.
 pub(crate) const FLAG_UPPER_HEMISPHERE: u32 = 2;

@@ -2,7 +2,8 @@
 
 use super::{
     body_len, crc32, BlobError, CHECKSUM_LEN, FLAG_CODED_TABLE, FLAG_ISOTROPIC, FLAG_LATENT_TABLE,
-    FLAG_STANDARDIZED, FLAG_STANDARD_WARP, FLAG_UPPER_HEMISPHERE, HEADER_LEN, MAGIC, VERSION,
+    FLAG_STANDARDIZED, FLAG_STANDARD_WARP, FLAG_UPPER_HEMISPHERE, FLAG_WARPED_TABLE, HEADER_LEN,
+    MAGIC, VERSION,
 };
 use crate::base::table::{encode, TableGrid};
 use crate::def::IncidentRange;
@@ -57,7 +58,7 @@ pub(crate) fn write_blob_with(
         .ok_or(BlobError::BufferTooSmall { needed: len, got })?;
     let precision = def.precision;
     let first_table = count - def.table_len();
-    let coded = def.latent_table == Some(TableGrid::Codes);
+    let coded = def.latent_table.is_some_and(TableGrid::is_coded);
     let mut index = 0usize;
     let mut error = None;
     visit(&mut |w: f32| {
@@ -141,8 +142,11 @@ fn write_header(def: &ModelDef, h: &mut [u8]) {
     }
     if let Some(grid) = def.latent_table {
         flags |= FLAG_LATENT_TABLE;
-        if grid == TableGrid::Codes {
+        if grid.is_coded() {
             flags |= FLAG_CODED_TABLE;
+        }
+        if grid.is_warped() {
+            flags |= FLAG_WARPED_TABLE;
         }
     }
     h[28..32].copy_from_slice(&flags.to_le_bytes());

@@ -16,8 +16,9 @@ use crate::error::TrainError;
 use crate::metrics::sampler::{from_glam, to_glam, weight, Drawn};
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::base::table::{
-    code_value_f32, encode, slice_incidence, slice_pair, trapezoid,
+    code_value_f32, encode, slice_incidence, slice_pair, total, trapezoid, MAX_NODES,
 };
+use diffbsdf::internals::base::table_axes;
 use diffbsdf::spec::LATENT_TABLE_SLICES as S;
 use diffbsdf::{AnyModel, ModelDef, Sample, TableGrid};
 use diffbsdf_ffi::slices::sample_batch;
@@ -27,8 +28,9 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
-/// The grid the trainer fits: 32 cells per side, nodes stored as 8-bit codes.
-const GRID: TableGrid = TableGrid::Codes;
+/// The grid the trainer fits: 32 cells per side, nodes stored as 8-bit codes, axes warped
+/// (or not: [`TableConfig::axes`]).
+const GRID: TableGrid = TableGrid::WarpedCodes;
 /// Cells per side.
 const C: usize = GRID.cells();
 /// Nodes per side.
@@ -49,6 +51,12 @@ pub struct TableConfig {
     /// Joint updates of every slice after those, against the density the kernel evaluates
     /// for each draw's incidence: two slices mixed (docs/math.md, (80)).
     pub joint_iterations: usize,
+    /// Whether the grid's axes are warped to where the flow's weight varies (docs/math.md,
+    /// (81), [`TableGrid::WarpedCodes`]); the uniform coded grid otherwise.
+    pub axes: bool,
+    /// Shares of the fitted axis warps tried, each blended with even cells (`s g + 1 -
+    /// s`), the one that leaves the least variance on held-out draws kept (0: even cells).
+    pub axis_shares: &'static [f64],
 }
 
 impl TableConfig {
@@ -62,6 +70,8 @@ impl TableConfig {
         floor: 0.05,
         iterations: 20,
         joint_iterations: 10,
+        axes: true,
+        axis_shares: &[0.0, 0.25, 0.5, 0.75, 1.0],
     };
     /// No table.
     pub const OFF: TableConfig = TableConfig {
@@ -69,6 +79,8 @@ impl TableConfig {
         floor: 0.05,
         iterations: 0,
         joint_iterations: 0,
+        axes: false,
+        axis_shares: &[0.0],
     };
 }
 
@@ -81,6 +93,8 @@ pub struct TableFit {
     pub rv_flow: f64,
     /// Mean relative variance with the table.
     pub rv_table: f64,
+    /// The share of the fitted axis warps kept (0: even cells, [`TableConfig::axis_shares`]).
+    pub axis_share: f64,
 }
 
 /// `model` with a latent table fitted against `material` (a model that has one gets a new
@@ -97,47 +111,40 @@ pub fn fit_latent_table(
         return Err(TrainError::Mismatch);
     }
     let flow = without_table(model)?;
-    // Each slice fitted on its own draws, then every slice together.
-    let mut per: Vec<(Vec<SliceDraw>, Vec<f64>)> = (0..S)
+    let draws: Vec<Vec<SliceDraw>> = (0..S)
         .into_par_iter()
-        .map(|k| {
-            let draws = slice_draws(&flow, material, cfg, seed, k);
-            let mut v = root_mean_square(&draws);
-            for _ in 0..cfg.iterations {
-                descend(&mut v, &draws, cfg.floor);
-            }
-            (draws, v)
-        })
+        .map(|k| slice_draws(&flow, material, cfg, seed, k))
         .collect();
-    for _ in 0..cfg.joint_iterations {
-        joint_descend(&mut per, cfg.floor);
-    }
-    let stored: Vec<Vec<f32>> = per.iter().map(|(_, v)| stored_values(v, cfg)).collect();
-    let stored_f64: Vec<Vec<f64>> = stored
-        .iter()
-        .map(|v| v.iter().map(|&x| f64::from(x)).collect())
-        .collect();
-    let slices: Vec<(Vec<f32>, TableFit)> = (0..S)
-        .into_par_iter()
-        .map(|k| {
-            let fit = TableFit {
-                rv_flow: relative_variance(&per[k].0, |_| 1.0),
-                rv_table: relative_variance(&per[k].0, |d| mixed_density(d, &stored_f64)),
-            };
-            (stored[k].clone(), fit)
-        })
-        .collect();
-    let count = slices.len().max(1) as f64;
+    // The axis warps (81): the widths the draws call for, blended with even cells by
+    // the share that leaves the least variance on held-out draws.
+    let (axes, axis_share) = if cfg.axes {
+        choose_axes(&draws, cfg)
+    } else {
+        (None, 0.0)
+    };
+    let draws = match &axes {
+        Some(axes) => read_back(&draws, Some(axes), |_| true),
+        None => draws,
+    };
+    let values = fit_values(&draws, cfg);
+    let stored: Vec<Vec<f32>> = values.iter().map(|v| stored_values(v, cfg)).collect();
     let fit = TableFit {
-        rv_flow: slices.iter().map(|s| s.1.rv_flow).sum::<f64>() / count,
-        rv_table: slices.iter().map(|s| s.1.rv_table).sum::<f64>() / count,
+        axis_share,
+        ..fit_report(&draws, &stored)
     };
     let mut params = vec![0.0f32; flow.def().param_count()];
     flow.params(&mut params).map_err(TrainError::Blob)?;
-    params.extend(slices.into_iter().flat_map(|s| s.0));
-    debug_assert_eq!(params.len(), flow.def().param_count() + GRID.node_count());
+    params.extend(stored.into_iter().flatten());
+    let grid = match axes {
+        Some(axes) => {
+            params.extend(axes.iter().flat_map(|g| g.iter().take(NODES).copied()));
+            GRID
+        }
+        None => TableGrid::Codes,
+    };
+    debug_assert_eq!(params.len(), flow.def().param_count() + grid.node_count());
     let table_def = ModelDef {
-        latent_table: Some(GRID),
+        latent_table: Some(grid),
         ..def
     };
     let tabled = AnyModel::from_params(table_def, &params).map_err(TrainError::Blob)?;
@@ -157,6 +164,111 @@ pub fn without_table(model: &AnyModel) -> Result<AnyModel, TrainError> {
     AnyModel::from_params(flow_def, &params).map_err(TrainError::Blob)
 }
 
+/// Every slice's node values fitted to its draws: the root-mean-square start and
+/// `cfg.iterations` updates (78) each, then `cfg.joint_iterations` joint updates (80).
+fn fit_values(draws: &[Vec<SliceDraw>], cfg: &TableConfig) -> Vec<Vec<f64>> {
+    let mut values: Vec<Vec<f64>> = draws
+        .par_iter()
+        .map(|d| {
+            let mut v = root_mean_square(d);
+            for _ in 0..cfg.iterations {
+                descend(&mut v, d, cfg.floor);
+            }
+            v
+        })
+        .collect();
+    for _ in 0..cfg.joint_iterations {
+        joint_descend(draws, &mut values, cfg.floor);
+    }
+    values
+}
+
+/// The mean over the slices of the relative variance of the flow alone and with the
+/// stored table, on `draws`.
+fn fit_report(draws: &[Vec<SliceDraw>], stored: &[Vec<f32>]) -> TableFit {
+    let stored: Vec<Vec<f64>> = stored
+        .iter()
+        .map(|v| v.iter().map(|&x| f64::from(x)).collect())
+        .collect();
+    let per: Vec<(f64, f64)> = draws
+        .par_iter()
+        .map(|d| {
+            (
+                relative_variance(d, |x| x.stretch),
+                relative_variance(d, |x| mixed_density(x, &stored)),
+            )
+        })
+        .collect();
+    let count = per.len().max(1) as f64;
+    TableFit {
+        rv_flow: per.iter().map(|p| p.0).sum::<f64>() / count,
+        rv_table: per.iter().map(|p| p.1).sum::<f64>() / count,
+        axis_share: 0.0,
+    }
+}
+
+/// The draws of every slice that `keep` keeps (by index), read back through the axis
+/// warps where there are some ([`SliceDraw::unwarp`]).
+fn read_back(
+    draws: &[Vec<SliceDraw>],
+    axes: Option<&AxisNodes>,
+    keep: impl Fn(usize) -> bool + Sync,
+) -> Vec<Vec<SliceDraw>> {
+    draws
+        .par_iter()
+        .map(|d| {
+            d.iter()
+                .enumerate()
+                .filter(|(i, _)| keep(*i))
+                .map(|(_, x)| {
+                    let mut x = x.clone();
+                    if let Some(axes) = axes {
+                        x.unwarp(axes);
+                    }
+                    x
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The axis warps to keep (`None` for even cells) and their share: for each share `s` of
+/// `cfg.axis_shares`, the nodes `s g + 1 - s` of the fitted widths `g` ([`fit_axes`]); the
+/// table fitted to the even-numbered draws of every slice and scored (mean relative
+/// variance over the slices) on the odd-numbered ones; the share that scores least wins,
+/// `s = 0` being even cells.
+fn choose_axes(draws: &[Vec<SliceDraw>], cfg: &TableConfig) -> (Option<AxisNodes>, f64) {
+    let widths = fit_axes(draws);
+    // (held-out variance, axes, share) of the best share so far.
+    let mut best: Option<(f64, Option<AxisNodes>, f64)> = None;
+    for &share in cfg.axis_shares {
+        let axes = (share > 0.0).then(|| blended(&widths, share));
+        let train = read_back(draws, axes.as_ref(), |i| i % 2 == 0);
+        let held = read_back(draws, axes.as_ref(), |i| i % 2 == 1);
+        let values = fit_values(&train, cfg);
+        let stored: Vec<Vec<f32>> = values.iter().map(|v| stored_values(v, cfg)).collect();
+        let score = fit_report(&held, &stored).rv_table;
+        if best.as_ref().is_none_or(|b| score < b.0) {
+            best = Some((score, axes, share));
+        }
+    }
+    best.map_or((None, 0.0), |b| (b.1, b.2))
+}
+
+/// The two axis warps' stored nodes, `g_0` and `g_1` (docs/math.md, (81)).
+type AxisNodes = [[f32; MAX_NODES]; 2];
+
+/// The stored axis nodes `share g + 1 - share` of the fitted nodes `g`.
+fn blended(g: &[[f64; MAX_NODES]; 2], share: f64) -> [[f32; MAX_NODES]; 2] {
+    let mut axes = [[1.0f32; MAX_NODES]; 2];
+    for (a, ga) in axes.iter_mut().zip(g) {
+        for (x, &w) in a.iter_mut().zip(ga).take(NODES) {
+            *x = stored_value(share * w + (1.0 - share));
+        }
+    }
+    axes
+}
+
 /// One draw of a slice: the node of its cell's lower corner, its place in the cell and
 /// the flow's squared weight.
 #[derive(Clone)]
@@ -165,6 +277,10 @@ struct SliceDraw {
     a: f64,
     b: f64,
     q2: f64,
+    /// The axis warps' slopes at the draw, `w_0' w_1'`, by which [`SliceDraw::unwarp`]
+    /// multiplied `q2` (1 without warps): the density 1 in `u` is this in the table's
+    /// coordinates.
+    stretch: f64,
     /// The lower of the two slices the draw's incidence mixes, and the upper one's weight.
     lo: usize,
     t: f64,
@@ -186,6 +302,174 @@ impl SliceDraw {
     fn surface(&self, v: &[f64]) -> f64 {
         self.corners().iter().map(|&(n, w)| w * v[n]).sum()
     }
+
+    /// The draw's point of the square (`(i + a) / C`, `(j + b) / C`).
+    fn point(&self) -> [f64; 2] {
+        let (i, j) = (self.node / NODES, self.node % NODES);
+        [
+            (i as f64 + self.a) / C as f64,
+            (j as f64 + self.b) / C as f64,
+        ]
+    }
+
+    /// Places the draw at `w^-1` of its point, the table's own coordinates, and
+    /// multiplies its squared weight by the warps' slopes there: with `T(p) = T_table(x)
+    /// / (w_0'(x_0) w_1'(x_1))`, `E[q^2 / T]` over draws uniform in `p` is `E[q^2 w_0'
+    /// w_1' / T_table]` (docs/math.md, (81)). The kernel's own functions, in f32.
+    fn unwarp(&mut self, axes: &[[f32; MAX_NODES]; 2]) {
+        let p = self.point();
+        let mut x = [0.0f64; 2];
+        let mut stretch = 1.0;
+        for (a, g) in axes.iter().enumerate() {
+            let t = total(g, C);
+            let back = table_axes::inverse(g, C, t, p[a] as f32);
+            stretch *= f64::from(table_axes::slope(g, C, t, back));
+            x[a] = f64::from(back) * C as f64;
+        }
+        let (i, j) = ((x[0] as usize).min(C - 1), (x[1] as usize).min(C - 1));
+        self.node = i * NODES + j;
+        self.a = x[0] - i as f64;
+        self.b = x[1] - j as f64;
+        self.q2 *= stretch;
+        self.stretch = stretch;
+    }
+}
+
+/// Fine bins per axis of the histograms the axis warps are chosen on.
+const AXIS_BINS: usize = 512;
+
+/// The two axis warps' stored nodes (docs/math.md, (81)): per axis, `C` cells of the
+/// square chosen on a grid of [`AXIS_BINS`] so that the per-cell means of each slice's
+/// normalised weight vary the most (the variance a piecewise-constant table on those cells
+/// would remove, summed over the slices and over the other axis' cells), by dynamic
+/// programming, each axis in turn with the other's cells fixed (twice); then each node of
+/// `g` the mean width (times `C`) of the two cells beside it (1 for even cells).
+fn fit_axes(draws: &[Vec<SliceDraw>]) -> [[f64; MAX_NODES]; 2] {
+    let uniform: Vec<f64> = (0..=C).map(|i| i as f64 / C as f64).collect();
+    let mut cuts = [uniform.clone(), uniform];
+    // Each slice's weights over their mean, so every slice counts alike.
+    let scale: Vec<f64> = draws
+        .iter()
+        .map(|d| {
+            let sum: f64 = d.iter().map(|x| x.q2.sqrt()).sum();
+            if sum > 0.0 {
+                d.len() as f64 / sum
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    for _ in 0..2 {
+        for axis in 0..2 {
+            cuts[axis] = best_cuts(draws, &scale, axis, &cuts[1 - axis]);
+        }
+    }
+    let mut axes = [[1.0f64; MAX_NODES]; 2];
+    for (g, c) in axes.iter_mut().zip(&cuts) {
+        let width = |i: usize| (c[i + 1] - c[i]) * C as f64;
+        for (i, gi) in g.iter_mut().enumerate().take(NODES) {
+            let w = if i == 0 {
+                width(0)
+            } else if i == C {
+                width(C - 1)
+            } else {
+                0.5 * (width(i - 1) + width(i))
+            };
+            *gi = w;
+        }
+    }
+    axes
+}
+
+/// The `C + 1` cuts along `axis` (0 and 1 at the ends, on the fine grid) that maximise
+/// what a line per cell explains of the weight, summed over every slice and every band of
+/// the other axis between `other`'s cuts: per cell and band, the weighted least-squares
+/// line through the fine bins' mean weights (the bilinear table is linear along each axis
+/// within a cell), its explained sum of squares `sy^2 / n + (sxy - sx sy / n)^2 / (sxx -
+/// sx^2 / n)`; the optimal partition by dynamic programming over the fine bins.
+fn best_cuts(draws: &[Vec<SliceDraw>], scale: &[f64], axis: usize, other: &[f64]) -> Vec<f64> {
+    let f = AXIS_BINS;
+    let bands = C * draws.len();
+    // Per band (slice, cell of the other axis) and fine bin: the count and the sum of q.
+    let mut sum = vec![0.0f64; bands * f];
+    let mut count = vec![0.0f64; bands * f];
+    for (k, (d, s)) in draws.iter().zip(scale).enumerate() {
+        for x in d {
+            let p = x.point();
+            let bin = ((p[axis] * f as f64) as usize).min(f - 1);
+            let band = other.partition_point(|&c| c <= p[1 - axis]).clamp(1, C) - 1;
+            let at = (k * C + band) * f + bin;
+            sum[at] += (x.q2 / x.stretch).sqrt() * s;
+            count[at] += 1.0;
+        }
+    }
+    // Prefix sums per band of n, n x, n x^2, s and s x (x the bin's centre in bins).
+    let stride = f + 1;
+    let mut pre = vec![[0.0f64; 5]; bands * stride];
+    for b in 0..bands {
+        for i in 0..f {
+            let (n, sy) = (count[b * f + i], sum[b * f + i]);
+            let x = i as f64 + 0.5;
+            let last = pre[b * stride + i];
+            pre[b * stride + i + 1] = [
+                last[0] + n,
+                last[1] + n * x,
+                last[2] + n * x * x,
+                last[3] + sy,
+                last[4] + sy * x,
+            ];
+        }
+    }
+    let score: Vec<f64> = (0..=f)
+        .into_par_iter()
+        .flat_map_iter(|lo| {
+            let pre = &pre;
+            (0..=f).map(move |hi| {
+                if hi <= lo {
+                    return f64::NEG_INFINITY;
+                }
+                let mut total = 0.0;
+                for b in 0..bands {
+                    let (h, l) = (pre[b * stride + hi], pre[b * stride + lo]);
+                    let [n, sx, sxx, sy, sxy] = core::array::from_fn(|m| h[m] - l[m]);
+                    if n > 0.0 {
+                        total += sy * sy / n;
+                        let vxx = sxx - sx * sx / n;
+                        if vxx > 1e-9 * n {
+                            let c = sxy - sx * sy / n;
+                            total += c * c / vxx;
+                        }
+                    }
+                }
+                total
+            })
+        })
+        .collect();
+    // best[k][hi]: the most score of k cells covering [0, hi).
+    let mut best = vec![f64::NEG_INFINITY; f + 1];
+    best[0] = 0.0;
+    let mut from = vec![vec![0usize; f + 1]; C + 1];
+    for row in from.iter_mut().skip(1) {
+        let mut next = vec![f64::NEG_INFINITY; f + 1];
+        for (hi, slot) in next.iter_mut().enumerate().skip(1) {
+            for (lo, &b) in best.iter().enumerate().take(hi) {
+                let v = b + score[lo * (f + 1) + hi];
+                if v > *slot {
+                    *slot = v;
+                    row[hi] = lo;
+                }
+            }
+        }
+        best = next;
+    }
+    let mut cuts = vec![1.0f64; C + 1];
+    let mut hi = f;
+    for k in (1..=C).rev() {
+        hi = from[k][hi];
+        cuts[k - 1] = hi as f64 / f as f64;
+    }
+    cuts[0] = 0.0;
+    cuts
 }
 
 /// A slice's surface value `b` as a density: divided by its integral `total`, the uniform
@@ -232,12 +516,12 @@ fn stored_value(x: f64) -> f32 {
     encode(clamped).map_or(clamped, code_value_f32)
 }
 
-/// `E[q^2 / T] / E[q]^2 - 1` over the draws, `T` the density `density` gives a draw (1:
-/// the flow alone); 0 where every weight is 0.
+/// `E[q^2 / T] / E[q]^2 - 1` over the draws, `T` the density `density` gives a draw in the
+/// table's coordinates (the draw's `stretch`: the flow alone); 0 where every weight is 0.
 fn relative_variance(draws: &[SliceDraw], density: impl Fn(&SliceDraw) -> f64) -> f64 {
     let (mut first, mut second) = (0.0, 0.0);
     for d in draws {
-        first += d.q2.sqrt();
+        first += (d.q2 / d.stretch).sqrt();
         second += d.q2 / density(d);
     }
     if first > 0.0 {
@@ -300,6 +584,7 @@ fn slice_draws(
                 a: x - i as f64,
                 b: y - j as f64,
                 q2: q * q,
+                stretch: 1.0,
                 lo: *lo,
                 t: *t,
             });
@@ -331,9 +616,10 @@ fn root_mean_square(draws: &[SliceDraw]) -> Vec<f64> {
     let mut second = vec![0.0f64; SLICE_LEN];
     let mut mass = vec![0.0f64; SLICE_LEN];
     for d in draws {
+        // Draws read back through axis warps lie `stretch` times denser than uniform.
         for (n, w) in d.corners() {
             second[n] += w * d.q2;
-            mass[n] += w;
+            mass[n] += w / d.stretch;
         }
     }
     (0..SLICE_LEN)
@@ -388,36 +674,35 @@ fn descend(v: &mut [f64], draws: &[SliceDraw], floor: f64) {
 /// mix `k`), so each value is multiplied by the square root of that ratio, every slice
 /// from the same current values. A draw of slice `k`'s hat mixes `k` and a neighbour, so
 /// the update of `k` reads the draws of `k - 1 ..= k + 1`.
-fn joint_descend(per: &mut [(Vec<SliceDraw>, Vec<f64>)], floor: f64) {
-    let totals: Vec<f64> = per.iter().map(|p| integral(&p.1)).collect();
+fn joint_descend(draws: &[Vec<SliceDraw>], values: &mut [Vec<f64>], floor: f64) {
+    let totals: Vec<f64> = values.iter().map(|v| integral(v)).collect();
     let updated: Vec<Vec<f64>> = (0..S)
         .into_par_iter()
         .map(|k| {
             let mut toward = vec![0.0f64; SLICE_LEN];
             let mut whole = 0.0;
-            for g in k.saturating_sub(1)..=(k + 1).min(S - 1) {
-                for d in &per[g].0 {
-                    let (lo, hi) = (d.lo, d.lo + 1);
-                    if lo != k && hi != k {
-                        continue;
-                    }
-                    let (b_lo, b_hi) = (d.surface(&per[lo].1), d.surface(&per[hi].1));
-                    let t = (1.0 - floor)
-                        * ((1.0 - d.t) * shaped(b_lo, totals[lo]) + d.t * shaped(b_hi, totals[hi]))
-                        + floor;
-                    let r = d.q2 / (t * t);
-                    let (m, b) = if lo == k {
-                        (1.0 - d.t, b_lo)
-                    } else {
-                        (d.t, b_hi)
-                    };
-                    for (n, w) in d.corners() {
-                        toward[n] += r * m * w;
-                    }
-                    whole += r * m * b;
+            let near = k.saturating_sub(1)..=(k + 1).min(S - 1);
+            for d in draws[near].iter().flatten() {
+                let (lo, hi) = (d.lo, d.lo + 1);
+                if lo != k && hi != k {
+                    continue;
                 }
+                let (b_lo, b_hi) = (d.surface(&values[lo]), d.surface(&values[hi]));
+                let t = (1.0 - floor)
+                    * ((1.0 - d.t) * shaped(b_lo, totals[lo]) + d.t * shaped(b_hi, totals[hi]))
+                    + floor;
+                let r = d.q2 / (t * t);
+                let (m, b) = if lo == k {
+                    (1.0 - d.t, b_lo)
+                } else {
+                    (d.t, b_hi)
+                };
+                for (n, w) in d.corners() {
+                    toward[n] += r * m * w;
+                }
+                whole += r * m * b;
             }
-            let mut v = per[k].1.clone();
+            let mut v = values[k].clone();
             // A slice with no mass stays uniform (its stored density).
             if whole > 0.0 && totals[k] > 0.0 {
                 for (n, x) in v.iter_mut().enumerate() {
@@ -430,8 +715,8 @@ fn joint_descend(per: &mut [(Vec<SliceDraw>, Vec<f64>)], floor: f64) {
             v
         })
         .collect();
-    for (p, v) in per.iter_mut().zip(updated) {
-        p.1 = v;
+    for (p, v) in values.iter_mut().zip(updated) {
+        *p = v;
     }
 }
 
@@ -464,6 +749,7 @@ mod tests {
                     a: x - i as f64,
                     b: y - j as f64,
                     q2: 0.0,
+                    stretch: 1.0,
                     lo: 0,
                     t: 0.0,
                 };
@@ -534,6 +820,16 @@ mod tests {
         assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0));
     }
 
+    /// [`joint_descend`] on the draws and values of `per`.
+    fn joint(per: &mut [(Vec<SliceDraw>, Vec<f64>)], floor: f64) {
+        let draws: Vec<Vec<SliceDraw>> = per.iter().map(|p| p.0.clone()).collect();
+        let mut values: Vec<Vec<f64>> = per.iter().map(|p| p.1.clone()).collect();
+        joint_descend(&draws, &mut values, floor);
+        for (p, v) in per.iter_mut().zip(values) {
+            p.1 = v;
+        }
+    }
+
     /// `E[q^2 / T]` over every slice's draws with `T` the two slices mixed as in
     /// [`joint_descend`] (the values unrounded).
     fn joint_moment(per: &[(Vec<SliceDraw>, Vec<f64>)], floor: f64) -> f64 {
@@ -580,6 +876,7 @@ mod tests {
                             a: x - i as f64,
                             b: y - j as f64,
                             q2: q * q,
+                            stretch: 1.0,
                             lo,
                             t: s - lo as f64,
                         }
@@ -600,7 +897,7 @@ mod tests {
             d.q2 = 0.0;
         }
         empty[5].1 = root_mean_square(&empty[5].0);
-        joint_descend(&mut empty, 0.05);
+        joint(&mut empty, 0.05);
         assert!(empty.iter().all(|p| p.1.iter().all(|x| x.is_finite())));
         assert_eq!(
             stored_values(&empty[5].1, &TableConfig::DEFAULT)[0],
@@ -609,7 +906,7 @@ mod tests {
         let mut last = joint_moment(&per, 0.05);
         let start = last;
         for step in 0..5 {
-            joint_descend(&mut per, 0.05);
+            joint(&mut per, 0.05);
             let now = joint_moment(&per, 0.05);
             assert!(now < last, "step {step}: {now} after {last}");
             last = now;
@@ -618,5 +915,68 @@ mod tests {
         assert!(per
             .iter()
             .all(|p| p.1.iter().all(|x| x.is_finite() && *x >= 0.0)));
+    }
+
+    /// Where the weight varies on a scale finer than the uniform grid's cells (a narrow
+    /// ridge across `u_0` at 0.40-0.43, the same in every slice), the fitted warp of axis 0
+    /// puts at least a quarter of its cells there (even cells: 1.6), each under a quarter
+    /// of an even cell; along axis 1, where nothing varies, no cell is that narrow. Reading the draws back through the warp keeps
+    /// `E[q^2 / T]` for the uniform density: the stretch undoes itself.
+    #[test]
+    fn axis_warps_crowd_cells_where_the_weight_varies() {
+        let mut rng = Pcg64::seed_from_u64(9);
+        let ridge = |x: f64| 1.0 + 30.0 * (-((x - 0.415) / 0.004).powi(2)).exp();
+        let draws: Vec<Vec<SliceDraw>> = (0..4)
+            .map(|_| {
+                (0..60_000)
+                    .map(|_| {
+                        let (x, y) = (rng.gen::<f64>(), rng.gen::<f64>());
+                        let (cx, cy) = (x * C as f64, y * C as f64);
+                        let (i, j) = ((cx as usize).min(C - 1), (cy as usize).min(C - 1));
+                        let q = ridge(x);
+                        SliceDraw {
+                            node: i * NODES + j,
+                            a: cx - i as f64,
+                            b: cy - j as f64,
+                            q2: q * q,
+                            stretch: 1.0,
+                            lo: 0,
+                            t: 0.0,
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let axes = blended(&fit_axes(&draws), 1.0);
+        // The cells' bounds on the square, w_0(i / C).
+        let g0 = &axes[0];
+        let bounds: Vec<f64> = (0..=C)
+            .map(|i| {
+                f64::from(table_axes::forward(
+                    g0,
+                    C,
+                    total(g0, C),
+                    i as f32 / C as f32,
+                ))
+            })
+            .collect();
+        let on_ridge = bounds
+            .windows(2)
+            .filter(|w| (0.39..0.44).contains(&(0.5 * (w[0] + w[1]))))
+            .count();
+        assert!(
+            on_ridge >= C / 4,
+            "{on_ridge} cells on the ridge: {bounds:?}"
+        );
+        // The ridge's cells are under a quarter of an even cell; along axis 1 none is.
+        let narrowest =
+            |g: &[f32; MAX_NODES]| g.iter().take(NODES).fold(f32::MAX, |m, &x| m.min(x));
+        assert!(narrowest(&axes[0]) < 0.25, "{:?}", axes[0]);
+        assert!(narrowest(&axes[1]) > 0.25, "{:?}", axes[1]);
+        let mut moved = draws[0].clone();
+        moved.iter_mut().for_each(|d| d.unwarp(&axes));
+        let before: f64 = draws[0].iter().map(|d| d.q2).sum();
+        let after: f64 = moved.iter().map(|d| d.q2 / d.stretch).sum();
+        assert!((after / before - 1.0).abs() < 1e-9, "{before} vs {after}");
     }
 }

@@ -33,7 +33,10 @@ fn the_table_lowers_the_measured_variance_and_stays_exact() {
         fit.rv_flow,
         fit.rv_table
     );
-    assert_eq!(tabled.def().latent_table, Some(diffbsdf::TableGrid::Codes));
+    assert_eq!(
+        tabled.def().latent_table,
+        Some(diffbsdf::TableGrid::WarpedCodes)
+    );
 
     // Through the blob and back, and without the table again.
     let bytes = tabled.blob(Precision::F32).unwrap();

@@ -36,6 +36,9 @@ pub struct TableArgs {
     /// at each incidence (docs/math.md, (80); 0: each slice on its own).
     #[arg(long, default_value_t = TableConfig::DEFAULT.joint_iterations)]
     pub joint_iterations: usize,
+    /// Keep the grid's cells evenly spaced (no axis warps, docs/math.md, (81)).
+    #[arg(long)]
+    pub no_axes: bool,
     /// Seed of the draws.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -51,15 +54,18 @@ pub fn run(args: TableArgs, out: &mut dyn std::io::Write) -> Result<(), CommandE
         floor: f64::from(args.floor),
         iterations: args.iterations,
         joint_iterations: args.joint_iterations,
+        axes: !args.no_axes,
+        ..TableConfig::DEFAULT
     };
     let start = Instant::now();
     let (tabled, fit) = fit_latent_table(&model, material.as_ref(), &cfg, args.seed)?;
     writeln!(
         out,
-        "latent table fitted, {:.1} s; mean relative variance on its draws {:.5} (flow alone) -> {:.5}",
+        "latent table fitted, {:.1} s; mean relative variance on its draws {:.5} (flow alone) -> {:.5}; axis warps' share {}",
         start.elapsed().as_secs_f64(),
         fit.rv_flow,
-        fit.rv_table
+        fit.rv_table,
+        fit.axis_share
     )
     .map_err(CommandError::Output)?;
     write_file(&args.out, &tabled.blob(Precision::F32)?)?;

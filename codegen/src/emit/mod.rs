@@ -200,8 +200,20 @@ impl<'a> Emitter<'a> {
             self.table_node();
             self.table_columns();
         }
-        if self.table() && self.needs_base_sample() {
+        if self.table() && (self.needs_base_sample() || self.table_axes()) {
             self.table_fraction();
+        }
+        if self.table_axes() {
+            self.table_axis();
+        }
+        if self.table_axes() && self.needs_base_sample() {
+            self.table_axis_forward();
+        }
+        if self.table_axes() && self.needs_ln_pdf() {
+            self.table_axis_inverse();
+            self.table_axis_slope();
+        }
+        if self.table() && self.needs_base_sample() {
             self.table_warp();
         }
         if self.table() && self.needs_ln_pdf() {
@@ -310,8 +322,12 @@ impl<'a> Emitter<'a> {
         }
         if self.table() {
             lines.push(
-                "// The latent table's column integrals of one wi's mixed slice and their total."
-                    .into(),
+                if self.table_axes() {
+                    "// The latent table's column integrals of one wi's mixed slice, or an axis warp's nodes, and their total."
+                } else {
+                    "// The latent table's column integrals of one wi's mixed slice and their total."
+                }
+                .into(),
             );
             let f = [
                 (T::Arr(Box::new(T::F), self.table_nodes()), "m"),

@@ -14,6 +14,11 @@ impl Emitter<'_> {
         self.m.def.latent_table.is_some()
     }
 
+    /// Whether the table's axes are warped (docs/math.md, (81)).
+    pub(super) fn table_axes(&self) -> bool {
+        self.m.def.latent_table.is_some_and(TableGrid::is_warped)
+    }
+
     /// The table's grid (the coded one where the model has none: nothing is emitted then).
     fn table_grid(&self) -> TableGrid {
         self.m.def.latent_table.unwrap_or(TableGrid::Codes)
@@ -269,8 +274,17 @@ impl Emitter<'_> {
         self.table_invert("cq", "tq", "u1", "x1");
         let r = self.d.decl(&vec_t, "r", None);
         self.code.line(r);
-        self.code.line("r.x = x0;");
-        self.code.line("r.y = x1;");
+        if self.table_axes() {
+            self.code
+                .line("// Then through the axis warps (docs/math.md, (81)).");
+            let w0 = self.call("table_axis_forward", true, &[&self.u(0), "x0"]);
+            let w1 = self.call("table_axis_forward", true, &[&self.u(1), "x1"]);
+            self.code.line(format!("r.x = {w0};"));
+            self.code.line(format!("r.y = {w1};"));
+        } else {
+            self.code.line("r.x = x0;");
+            self.code.line("r.y = x1;");
+        }
         self.code.line("return r;");
         self.code.close("}");
         self.end_fn();
@@ -283,11 +297,23 @@ impl Emitter<'_> {
         );
         let ps = [(self.st("Cond"), "cond"), (T::F, "x0"), (T::F, "x1")];
         self.fn_open(T::F, "table_ln_density", true, &ps);
+        // With axis warps, the table's point is w^-1 of x and their slopes divide (81).
+        let (p0, p1) = if self.table_axes() {
+            for a in 0..2 {
+                let back = self.call("table_axis_inverse", true, &[&self.u(a), &format!("x{a}")]);
+                self.decl(T::F, &format!("y{a}"), &back);
+                let slope = self.call("table_axis_slope", true, &[&self.u(a), &format!("y{a}")]);
+                self.decl(T::F, &format!("s{a}"), &slope);
+            }
+            ("y0", "y1")
+        } else {
+            ("x0", "x1")
+        };
         self.table_columns_call();
         let cells = self.table_cells();
         let c = self.f(cells as f32);
-        self.table_cell(&format!("x0 * {c}"), "i", "a");
-        self.table_cell(&format!("x1 * {c}"), "j", "b");
+        self.table_cell(&format!("{p0} * {c}"), "i", "a");
+        self.table_cell(&format!("{p1} * {c}"), "j", "b");
         let one = self.f(1.0);
         let n = |e: &Self, i: &str, j: &str| e.call("table_node", true, &["cond", i, j]);
         let lo = format!(
@@ -303,11 +329,95 @@ impl Emitter<'_> {
         self.decl(T::F, "lo", &lo);
         self.decl(T::F, "hi", &hi);
         self.decl(T::F, "bil", &format!("({one} - a) * lo + a * hi"));
-        let ln = self.math(
-            Math::Log,
-            &format!("bil * {} / cm.tot", self.f((cells * cells) as f32)),
-        );
+        let density = format!("bil * {} / cm.tot", self.f((cells * cells) as f32));
+        let ln = if self.table_axes() {
+            self.math(Math::Log, &format!("{density} / (s0 * s1)"))
+        } else {
+            self.math(Math::Log, &density)
+        };
         self.code.line(format!("return {ln};"));
+        self.end_fn();
+    }
+
+    /// The nodes of axis warp `a` (0 or 1) and their total, in the column integrals'
+    /// struct (docs/math.md, (81)); the kernel's `LatentTable::prepare` sums them in the
+    /// same order.
+    pub(super) fn table_axis(&mut self) {
+        self.code
+            .line("// An axis warp's nodes g_a and their total (docs/math.md, (81)).");
+        let cols_t = self.st("Cols");
+        self.fn_open(cols_t.clone(), "table_axis", true, &[(T::U, "ax")]);
+        let r = self.d.decl(&cols_t, "r", None);
+        self.code.line(r);
+        let nodes = self.table_nodes();
+        let first = self.table_offset() + S * self.table_slice_len();
+        self.for_open("gi", &self.u(nodes));
+        let g = self
+            .d
+            .to_f32(&self.w(format!("{first}u + ax * {nodes}u + gi")));
+        self.code.line(format!("r.m[gi] = {g};"));
+        self.code.close("}");
+        self.table_total("r.m", "gt");
+        self.code.line("r.tot = gt;");
+        self.code.line("return r;");
+        self.end_fn();
+    }
+
+    /// `w_a(x)`: the area of `g_a` below `x` over its total (81).
+    pub(super) fn table_axis_forward(&mut self) {
+        self.code.line(
+            "// w_a(x): the area of g_a from 0 to x over its total, whole cells then a g_i + a^2 (g_(i+1) - g_i) / 2 (docs/math.md, (81)).",
+        );
+        let ps = [(T::U, "ax"), (T::F, "x")];
+        self.fn_open(T::F, "table_axis_forward", true, &ps);
+        let g = self.call("table_axis", true, &["ax"]);
+        self.decl(self.st("Cols"), "g", &g);
+        let c = self.f(self.table_cells() as f32);
+        self.table_cell(&format!("x * {c}"), "i", "a");
+        let (zero, one, half) = (self.f(0.0), self.f(1.0), self.f(0.5));
+        self.decl(T::F, "before", &zero);
+        self.for_open("k", "i");
+        self.code.line(format!(
+            "before = before + {half} * (g.m[k] + g.m[k + 1u]);"
+        ));
+        self.code.close("}");
+        self.decl(
+            T::F,
+            "within",
+            &format!("a * (g.m[i] + {half} * (g.m[i + 1u] - g.m[i]) * a)"),
+        );
+        let y = self.d.clamp("(before + within) / g.tot", &zero, &one);
+        self.code.line(format!("return {y};"));
+        self.end_fn();
+    }
+
+    /// `w_a^-1(y)`: the table's inversion of a piecewise-linear CDF (76), (81).
+    pub(super) fn table_axis_inverse(&mut self) {
+        self.code
+            .line("// w_a^-1(y), as the table inverts its CDFs (docs/math.md, (76), (81)).");
+        let ps = [(T::U, "ax"), (T::F, "y")];
+        self.fn_open(T::F, "table_axis_inverse", true, &ps);
+        let g = self.call("table_axis", true, &["ax"]);
+        self.decl(self.st("Cols"), "g", &g);
+        self.table_invert("g.m", "g.tot", "y", "x");
+        self.code.line("return x;");
+        self.end_fn();
+    }
+
+    /// `w_a'(x) = g_a(x) C / total` (81).
+    pub(super) fn table_axis_slope(&mut self) {
+        self.code
+            .line("// w_a'(x) = g_a(x) C / total (docs/math.md, (81)).");
+        let ps = [(T::U, "ax"), (T::F, "x")];
+        self.fn_open(T::F, "table_axis_slope", true, &ps);
+        let g = self.call("table_axis", true, &["ax"]);
+        self.decl(self.st("Cols"), "g", &g);
+        let c = self.f(self.table_cells() as f32);
+        self.table_cell(&format!("x * {c}"), "i", "a");
+        let one = self.f(1.0);
+        self.code.line(format!(
+            "return (({one} - a) * g.m[i] + a * g.m[i + 1u]) * {c} / g.tot;"
+        ));
         self.end_fn();
     }
 }

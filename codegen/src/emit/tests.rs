@@ -39,8 +39,10 @@ fn outputs() -> Vec<Output> {
     table.latent_table = Some(TableGrid::Codes);
     let mut value_table = warped;
     value_table.latent_table = Some(TableGrid::Values);
+    let mut axes_table = warped;
+    axes_table.latent_table = Some(TableGrid::WarpedCodes);
     let mut out = Vec::new();
-    for def in [disk, sphere, warped, table, value_table] {
+    for def in [disk, sphere, warped, table, value_table, axes_table] {
         let bytes = blob(&def);
         for language in [Language::Glsl, Language::Wgsl, Language::C] {
             for float in [Float::F32, Float::F16] {
@@ -57,6 +59,7 @@ fn outputs() -> Vec<Output> {
                         match def.latent_table {
                             Some(TableGrid::Codes) => " table",
                             Some(TableGrid::Values) => " value table",
+                            Some(TableGrid::WarpedCodes) => " warped table",
                             None => "",
                         }
                     ),
@@ -203,8 +206,8 @@ fn warp_scale_is_the_kernels() {
         .into_iter()
         .filter(|o| o.def.standard_warp)
         .collect();
-    // The warped model and the two with a latent table, in five outputs each.
-    assert_eq!(warped.len(), 15);
+    // The warped model and the three with a latent table, in five outputs each.
+    assert_eq!(warped.len(), 20);
     for o in warped {
         // The first line of each is `a = |z| / K`, `s = y / K` or `a = |y| / K`.
         for name in ["warp_compress", "warp_expand", "warp_ln_expansion"] {
@@ -290,7 +293,7 @@ fn latent_table_layout_and_cdf_are_the_kernels() {
         };
         seen += 1;
         let want_cells = match grid {
-            TableGrid::Codes => LATENT_TABLE_CELLS,
+            TableGrid::Codes | TableGrid::WarpedCodes => LATENT_TABLE_CELLS,
             TableGrid::Values => LATENT_TABLE_VALUE_CELLS,
         };
         let b = body(o, "normal_cdf");
@@ -335,6 +338,19 @@ fn latent_table_layout_and_cdf_are_the_kernels() {
             assert_eq!(uints(l), want, "{}: {l}", o.label);
         }
         assert_eq!(cells, 2, "{}: the cells of both coordinates", o.label);
+        // The axis warps' nodes follow the slices' (docs/math.md, (81)).
+        if grid.is_warped() {
+            let b = body(o, "table_axis");
+            let at = b.iter().copied().find(|l| l.contains("ax *"));
+            let at = at.unwrap_or_else(|| panic!("{}: no axis offset", o.label));
+            let slices = (LATENT_TABLE_SLICES * (want_cells + 1) * (want_cells + 1)) as u32;
+            assert_eq!(
+                uints(at),
+                [offset + slices, want_cells as u32 + 1],
+                "{}",
+                o.label
+            );
+        }
     }
-    assert_eq!(seen, 10, "the table models in every language and precision");
+    assert_eq!(seen, 15, "the table models in every language and precision");
 }
