@@ -277,10 +277,12 @@ impl Emitter<'_> {
         if self.table_axes() {
             self.code
                 .line("// Then through the axis warps (docs/math.md, (81)).");
-            let w0 = self.call("table_axis_forward", true, &[&self.u(0), "x0"]);
-            let w1 = self.call("table_axis_forward", true, &[&self.u(1), "x1"]);
-            self.code.line(format!("r.x = {w0};"));
-            self.code.line(format!("r.y = {w1};"));
+            for (a, (x, field)) in [("x0", "x"), ("x1", "y")].into_iter().enumerate() {
+                let g = self.call("table_axis", true, &[&self.u(a)]);
+                self.decl(self.st("Cols"), &format!("g{a}"), &g);
+                let w = self.call("table_axis_forward", false, &[&format!("g{a}"), x]);
+                self.code.line(format!("r.{field} = {w};"));
+            }
         } else {
             self.code.line("r.x = x0;");
             self.code.line("r.y = x1;");
@@ -300,9 +302,12 @@ impl Emitter<'_> {
         // With axis warps, the table's point is w^-1 of x and their slopes divide (81).
         let (p0, p1) = if self.table_axes() {
             for a in 0..2 {
-                let back = self.call("table_axis_inverse", true, &[&self.u(a), &format!("x{a}")]);
-                self.decl(T::F, &format!("y{a}"), &back);
-                let slope = self.call("table_axis_slope", true, &[&self.u(a), &format!("y{a}")]);
+                let g = self.call("table_axis", true, &[&self.u(a)]);
+                self.decl(self.st("Cols"), &format!("g{a}"), &g);
+                let (ga, xa, ya) = (format!("g{a}"), format!("x{a}"), format!("y{a}"));
+                let back = self.call("table_axis_inverse", false, &[&ga, &xa]);
+                self.decl(T::F, &ya, &back);
+                let slope = self.call("table_axis_slope", false, &[&ga, &ya]);
                 self.decl(T::F, &format!("s{a}"), &slope);
             }
             ("y0", "y1")
@@ -363,15 +368,14 @@ impl Emitter<'_> {
         self.end_fn();
     }
 
-    /// `w_a(x)`: the area of `g_a` below `x` over its total (81).
+    /// `w_a(x)`: the area of `g_a` below `x` over its total (81), for the axis `g` that
+    /// `table_axis` returns (read once per axis in each caller).
     pub(super) fn table_axis_forward(&mut self) {
         self.code.line(
             "// w_a(x): the area of g_a from 0 to x over its total, whole cells then a g_i + a^2 (g_(i+1) - g_i) / 2 (docs/math.md, (81)).",
         );
-        let ps = [(T::U, "ax"), (T::F, "x")];
-        self.fn_open(T::F, "table_axis_forward", true, &ps);
-        let g = self.call("table_axis", true, &["ax"]);
-        self.decl(self.st("Cols"), "g", &g);
+        let ps = [(self.st("Cols"), "g"), (T::F, "x")];
+        self.fn_open(T::F, "table_axis_forward", false, &ps);
         let c = self.f(self.table_cells() as f32);
         self.table_cell(&format!("x * {c}"), "i", "a");
         let (zero, one, half) = (self.f(0.0), self.f(1.0), self.f(0.5));
@@ -395,10 +399,8 @@ impl Emitter<'_> {
     pub(super) fn table_axis_inverse(&mut self) {
         self.code
             .line("// w_a^-1(y), as the table inverts its CDFs (docs/math.md, (76), (81)).");
-        let ps = [(T::U, "ax"), (T::F, "y")];
-        self.fn_open(T::F, "table_axis_inverse", true, &ps);
-        let g = self.call("table_axis", true, &["ax"]);
-        self.decl(self.st("Cols"), "g", &g);
+        let ps = [(self.st("Cols"), "g"), (T::F, "y")];
+        self.fn_open(T::F, "table_axis_inverse", false, &ps);
         self.table_invert("g.m", "g.tot", "y", "x");
         self.code.line("return x;");
         self.end_fn();
@@ -408,10 +410,8 @@ impl Emitter<'_> {
     pub(super) fn table_axis_slope(&mut self) {
         self.code
             .line("// w_a'(x) = g_a(x) C / total (docs/math.md, (81)).");
-        let ps = [(T::U, "ax"), (T::F, "x")];
-        self.fn_open(T::F, "table_axis_slope", true, &ps);
-        let g = self.call("table_axis", true, &["ax"]);
-        self.decl(self.st("Cols"), "g", &g);
+        let ps = [(self.st("Cols"), "g"), (T::F, "x")];
+        self.fn_open(T::F, "table_axis_slope", false, &ps);
         let c = self.f(self.table_cells() as f32);
         self.table_cell(&format!("x * {c}"), "i", "a");
         let one = self.f(1.0);

@@ -411,8 +411,7 @@ diffbsdf_tiny_half_vector_axes_Cols diffbsdf_tiny_half_vector_axes_table_axis(ui
 }
 
 // w_a(x): the area of g_a from 0 to x over its total, whole cells then a g_i + a^2 (g_(i+1) - g_i) / 2 (docs/math.md, (81)).
-float diffbsdf_tiny_half_vector_axes_table_axis_forward(uint base, uint ax, float x) {
-    precise diffbsdf_tiny_half_vector_axes_Cols g = diffbsdf_tiny_half_vector_axes_table_axis(base, ax);
+float diffbsdf_tiny_half_vector_axes_table_axis_forward(diffbsdf_tiny_half_vector_axes_Cols g, float x) {
     uint i = uint(max(x * 32.0, 0.0));
     if (i > 31u) {
         i = 31u;
@@ -427,8 +426,7 @@ float diffbsdf_tiny_half_vector_axes_table_axis_forward(uint base, uint ax, floa
 }
 
 // w_a^-1(y), as the table inverts its CDFs (docs/math.md, (76), (81)).
-float diffbsdf_tiny_half_vector_axes_table_axis_inverse(uint base, uint ax, float y) {
-    precise diffbsdf_tiny_half_vector_axes_Cols g = diffbsdf_tiny_half_vector_axes_table_axis(base, ax);
+float diffbsdf_tiny_half_vector_axes_table_axis_inverse(diffbsdf_tiny_half_vector_axes_Cols g, float y) {
     precise float rem = y * g.tot;
     uint cell = 0u;
     for (uint n = 0u; n < 31u; n++) {
@@ -444,8 +442,7 @@ float diffbsdf_tiny_half_vector_axes_table_axis_inverse(uint base, uint ax, floa
 }
 
 // w_a'(x) = g_a(x) C / total (docs/math.md, (81)).
-float diffbsdf_tiny_half_vector_axes_table_axis_slope(uint base, uint ax, float x) {
-    precise diffbsdf_tiny_half_vector_axes_Cols g = diffbsdf_tiny_half_vector_axes_table_axis(base, ax);
+float diffbsdf_tiny_half_vector_axes_table_axis_slope(diffbsdf_tiny_half_vector_axes_Cols g, float x) {
     uint i = uint(max(x * 32.0, 0.0));
     if (i > 31u) {
         i = 31u;
@@ -499,8 +496,10 @@ diffbsdf_tiny_half_vector_axes_Vec2 diffbsdf_tiny_half_vector_axes_table_warp(ui
         precise float x1 = clamp((float(cell) + diffbsdf_tiny_half_vector_axes_table_fraction(cq[cell], cq[cell + 1u], rem)) / 32.0, 0.0, 1.0);
         precise diffbsdf_tiny_half_vector_axes_Vec2 r;
         // Then through the axis warps (docs/math.md, (81)).
-        r.x = diffbsdf_tiny_half_vector_axes_table_axis_forward(base, 0u, x0);
-        r.y = diffbsdf_tiny_half_vector_axes_table_axis_forward(base, 1u, x1);
+        precise diffbsdf_tiny_half_vector_axes_Cols g0 = diffbsdf_tiny_half_vector_axes_table_axis(base, 0u);
+        r.x = diffbsdf_tiny_half_vector_axes_table_axis_forward(g0, x0);
+        precise diffbsdf_tiny_half_vector_axes_Cols g1 = diffbsdf_tiny_half_vector_axes_table_axis(base, 1u);
+        r.y = diffbsdf_tiny_half_vector_axes_table_axis_forward(g1, x1);
         return r;
     }
 }
@@ -529,10 +528,12 @@ float diffbsdf_tiny_half_vector_axes_normal_cdf(float z) {
 
 // ln of the latent table's density: the mixed nodes' bilinear interpolation times C^2 over their total (docs/math.md, (74)).
 float diffbsdf_tiny_half_vector_axes_table_ln_density(uint base, diffbsdf_tiny_half_vector_axes_Cond cond, float x0, float x1) {
-    precise float y0 = diffbsdf_tiny_half_vector_axes_table_axis_inverse(base, 0u, x0);
-    precise float s0 = diffbsdf_tiny_half_vector_axes_table_axis_slope(base, 0u, y0);
-    precise float y1 = diffbsdf_tiny_half_vector_axes_table_axis_inverse(base, 1u, x1);
-    precise float s1 = diffbsdf_tiny_half_vector_axes_table_axis_slope(base, 1u, y1);
+    precise diffbsdf_tiny_half_vector_axes_Cols g0 = diffbsdf_tiny_half_vector_axes_table_axis(base, 0u);
+    precise float y0 = diffbsdf_tiny_half_vector_axes_table_axis_inverse(g0, x0);
+    precise float s0 = diffbsdf_tiny_half_vector_axes_table_axis_slope(g0, y0);
+    precise diffbsdf_tiny_half_vector_axes_Cols g1 = diffbsdf_tiny_half_vector_axes_table_axis(base, 1u);
+    precise float y1 = diffbsdf_tiny_half_vector_axes_table_axis_inverse(g1, x1);
+    precise float s1 = diffbsdf_tiny_half_vector_axes_table_axis_slope(g1, y1);
     precise diffbsdf_tiny_half_vector_axes_Cols cm = diffbsdf_tiny_half_vector_axes_table_columns(base, cond);
     uint i = uint(max(y0 * 32.0, 0.0));
     if (i > 31u) {
