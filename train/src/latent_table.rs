@@ -287,6 +287,31 @@ struct SliceDraw {
 }
 
 impl SliceDraw {
+    /// A draw at the point `p` of the square (the grid's cell and the place in it) with
+    /// weight `q`, mixing slices `lo` and `lo + 1` with weight `t`.
+    fn new(p: [f64; 2], q: f64, lo: usize, t: f64) -> Self {
+        let mut d = SliceDraw {
+            node: 0,
+            a: 0.0,
+            b: 0.0,
+            q2: q * q,
+            stretch: 1.0,
+            lo,
+            t,
+        };
+        d.place([p[0] * C as f64, p[1] * C as f64]);
+        d
+    }
+
+    /// Puts the draw at `x`, in cells of the grid: its cell's lower node and its place in
+    /// the cell.
+    fn place(&mut self, x: [f64; 2]) {
+        let (i, j) = ((x[0] as usize).min(C - 1), (x[1] as usize).min(C - 1));
+        self.node = i * NODES + j;
+        self.a = x[0] - i as f64;
+        self.b = x[1] - j as f64;
+    }
+
     /// The draw's four nodes and their bilinear weights.
     fn corners(&self) -> [(usize, f64); 4] {
         let (n, a, b) = (self.node, self.a, self.b);
@@ -326,10 +351,7 @@ impl SliceDraw {
             stretch *= f64::from(table_axes::slope(g, C, t, back));
             x[a] = f64::from(back) * C as f64;
         }
-        let (i, j) = ((x[0] as usize).min(C - 1), (x[1] as usize).min(C - 1));
-        self.node = i * NODES + j;
-        self.a = x[0] - i as f64;
-        self.b = x[1] - j as f64;
+        self.place(x);
         self.q2 *= stretch;
         self.stretch = stretch;
     }
@@ -577,17 +599,7 @@ fn slice_draws(
                 pdf: f64::from(s.pdf),
             });
             let q = weight(material, wi, drawn);
-            let (x, y) = (u[0] * C as f64, u[1] * C as f64);
-            let (i, j) = ((x as usize).min(C - 1), (y as usize).min(C - 1));
-            draws.push(SliceDraw {
-                node: i * NODES + j,
-                a: x - i as f64,
-                b: y - j as f64,
-                q2: q * q,
-                stretch: 1.0,
-                lo: *lo,
-                t: *t,
-            });
+            draws.push(SliceDraw::new(*u, q, *lo, *t));
         }
     }
     draws
@@ -742,17 +754,7 @@ mod tests {
         let mut rng = Pcg64::seed_from_u64(3);
         (0..count)
             .map(|_| {
-                let (x, y) = (rng.gen::<f64>() * C as f64, rng.gen::<f64>() * C as f64);
-                let (i, j) = ((x as usize).min(C - 1), (y as usize).min(C - 1));
-                let mut d = SliceDraw {
-                    node: i * NODES + j,
-                    a: x - i as f64,
-                    b: y - j as f64,
-                    q2: 0.0,
-                    stretch: 1.0,
-                    lo: 0,
-                    t: 0.0,
-                };
+                let mut d = SliceDraw::new([rng.gen(), rng.gen()], 0.0, 0, 0.0);
                 let q = d.surface(g);
                 d.q2 = q * q;
                 d
@@ -865,21 +867,13 @@ mod tests {
                         let s = k as f64 + rng.gen::<f64>() - rng.gen::<f64>();
                         let s = s.abs().min(2.0 * (S - 1) as f64 - s.abs());
                         let lo = (s as usize).min(S - 2);
-                        let (x, y) = (rng.gen::<f64>() * C as f64, rng.gen::<f64>() * C as f64);
-                        let (i, j) = ((x as usize).min(C - 1), (y as usize).min(C - 1));
+                        let p: [f64; 2] = [rng.gen(), rng.gen()];
+                        let (x, y) = (p[0] * C as f64, p[1] * C as f64);
                         // A peak whose place in `u` moves with the incidence.
                         let centre = s / (S - 1) as f64 * C as f64;
                         let q =
                             0.2 + 10.0 * (-((x - centre).powi(2) + (y - 8.0).powi(2)) / 8.0).exp();
-                        SliceDraw {
-                            node: i * NODES + j,
-                            a: x - i as f64,
-                            b: y - j as f64,
-                            q2: q * q,
-                            stretch: 1.0,
-                            lo,
-                            t: s - lo as f64,
-                        }
+                        SliceDraw::new(p, q, lo, s - lo as f64)
                     })
                     .collect();
                 let mut v = root_mean_square(&draws);
@@ -930,19 +924,8 @@ mod tests {
             .map(|_| {
                 (0..60_000)
                     .map(|_| {
-                        let (x, y) = (rng.gen::<f64>(), rng.gen::<f64>());
-                        let (cx, cy) = (x * C as f64, y * C as f64);
-                        let (i, j) = ((cx as usize).min(C - 1), (cy as usize).min(C - 1));
-                        let q = ridge(x);
-                        SliceDraw {
-                            node: i * NODES + j,
-                            a: cx - i as f64,
-                            b: cy - j as f64,
-                            q2: q * q,
-                            stretch: 1.0,
-                            lo: 0,
-                            t: 0.0,
-                        }
+                        let p: [f64; 2] = [rng.gen(), rng.gen()];
+                        SliceDraw::new(p, ridge(p[0]), 0, 0.0)
                     })
                     .collect()
             })
