@@ -106,6 +106,7 @@ pub fn check(
             exact_samples: 0,
             kl: None,
             timing_calls: 0,
+            off_grid_incidences: 0,
             seed: 11,
         };
         let r = evaluate(&at, material, &cfg);

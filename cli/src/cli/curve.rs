@@ -178,6 +178,7 @@ fn point(
         exact_samples: 0,
         kl: None,
         timing_calls: 0,
+        off_grid_incidences: 0,
         seed: 7,
     };
     let full = evaluate(&fitted.model, material, &eval);

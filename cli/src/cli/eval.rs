@@ -32,6 +32,11 @@ pub struct EvalArgs {
     /// f16 together, normal to grazing wi, u at the edges of [0, 1]); 0 skips it.
     #[arg(long, default_value_t = diffbsdf_train::metrics::exactness::DEFAULT_SAMPLES)]
     pub exact_samples: usize,
+    /// Incidences off the grid (theta_i in equal strata of [0, 89.5] deg, each jittered,
+    /// phi_i uniform; `--samples` draws each): the learned model's and the material's
+    /// sampler's relative variance pooled over them; 0 skips them.
+    #[arg(long, default_value_t = 0)]
+    pub off_grid: usize,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
@@ -49,6 +54,7 @@ pub fn run(args: EvalArgs, out: &mut dyn std::io::Write) -> Result<(), CommandEr
         samples: args.samples,
         seed: args.seed,
         exact_samples: args.exact_samples,
+        off_grid_incidences: args.off_grid,
         ..EvalConfig::default()
     };
     if args.no_kl {

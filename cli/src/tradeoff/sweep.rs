@@ -162,6 +162,7 @@ pub fn measure_point(
         exact_samples: 0,
         kl: cfg.kl,
         timing_calls: 0,
+        off_grid_incidences: 0,
         seed: cfg.seed,
     };
     let r: Report = evaluate(model, material, &eval);

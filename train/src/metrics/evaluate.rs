@@ -6,6 +6,7 @@ use super::cost::{self, Cost};
 use super::exactness::{self, Exactness};
 use super::grid::wi_grid;
 use super::kl::{kl_divergence, KlGrid};
+use super::off_grid::{self, OffGrid};
 use super::sampler::{draw, learned_weights, weight, SamplerKind};
 use super::stats::WeightStats;
 use diffbsdf::{AnyModel, ModelDef, Precision};
@@ -29,6 +30,9 @@ pub struct EvalConfig {
     pub kl: Option<KlGrid>,
     /// Calls timed for the cost figures; 0 skips timing.
     pub timing_calls: usize,
+    /// Incidences off the grid (`off_grid`, `samples` draws each, per hemisphere
+    /// measured); 0 skips them.
+    pub off_grid_incidences: usize,
     /// Seed.
     pub seed: u64,
 }
@@ -44,6 +48,7 @@ impl Default for EvalConfig {
                 phi: 128,
             }),
             timing_calls: 100_000,
+            off_grid_incidences: 0,
             seed: 7,
         }
     }
@@ -120,6 +125,8 @@ pub struct Report {
     pub exactness: Option<Exactness>,
     /// Time per sample, if measured.
     pub cost: Option<Cost>,
+    /// The relative variance pooled over incidences off the grid, if measured.
+    pub off_grid: Option<OffGrid>,
     /// Per-`wi` rows.
     pub rows: Vec<WiRow>,
 }
@@ -254,6 +261,10 @@ pub fn evaluate(model: &AnyModel, material: &dyn Material, cfg: &EvalConfig) -> 
             .then(|| exactness::check(model, cfg.exact_samples, cfg.seed).ok())
             .flatten(),
         cost,
+        off_grid: (cfg.off_grid_incidences > 0).then(|| {
+            let n = cfg.off_grid_incidences;
+            off_grid::measure(model, material, n, cfg.samples, both, cfg.seed)
+        }),
         rows,
     }
 }

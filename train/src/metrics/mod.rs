@@ -9,6 +9,7 @@ pub mod evaluate;
 pub mod exactness;
 pub mod grid;
 pub mod kl;
+pub mod off_grid;
 pub mod sampler;
 pub mod stats;
 pub mod table;

@@ -39,6 +39,13 @@ pub fn render(r: &Report) -> String {
         "learned / material mean RV: {:.3}",
         r.rv_ratio_to_material
     );
+    if let Some(o) = &r.off_grid {
+        let _ = writeln!(
+            s,
+            "off the grid ({} incidences, theta_i in strata of [0, 89.5] deg, phi_i uniform): RV mean learned {:.4}, material {:.4}, ratio {:.3}; learned firefly worst {:.2}",
+            o.incidences, o.learned_rv_mean, o.material_rv_mean, o.rv_ratio_to_material, o.learned_firefly_worst
+        );
+    }
     let c = &r.consistency;
     let _ = writeln!(
         s,
