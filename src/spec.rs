@@ -161,10 +161,24 @@ pub const LATENT_TABLE_CELLS: usize = 32;
 /// before the coded table).
 pub const LATENT_TABLE_VALUE_CELLS: usize = 16;
 
-/// Incidence slices of the latent table, at `s = 1 - sqrt(wi.z)` evenly spaced on `[0, 1]`
-/// (dense towards grazing incidence, where the target changes fastest); a `wi` between two
-/// slices mixes their densities linearly.
+/// Incidence slices of the latent table (blob flag bit 7 clear), at `s = 1 - sqrt(wi.z)`
+/// evenly spaced on `[0, 1]` (dense towards grazing incidence, where the target changes
+/// fastest); a `wi` between two slices mixes their densities linearly.
 pub const LATENT_TABLE_SLICES: usize = 32;
+
+/// Incidence slices of a latent table on the blended layout (blob flag bit 7,
+/// [`crate::base::table::TableGrid::BlendedSlices`], what the trainer writes): at `s = x (b +
+/// (1 - b) x)`, `x = sqrt(1 - sqrt(wi.z))`, `b` = [`LATENT_TABLE_SLICE_BLEND`], evenly spaced
+/// on `[0, 1]` (docs/math.md, (82)): near normal incidence `s` grows like `theta_i` (a slice
+/// every 5-6 degrees there, where the flow's weight changes fastest with `theta_i`), towards
+/// grazing as densely as the 32 slices of [`LATENT_TABLE_SLICES`] (about a degree apart).
+pub const LATENT_TABLE_BLENDED_SLICES: usize = 40;
+
+/// The share `b` of the blended layout's term linear in `x` (docs/math.md, (82)).
+pub const LATENT_TABLE_SLICE_BLEND: f32 = 0.5;
+
+/// The most slices a latent table has.
+pub const LATENT_TABLE_MAX_SLICES: usize = LATENT_TABLE_BLENDED_SLICES;
 
 /// Largest node value a latent table may hold (a blob or parameter vector with a value
 /// outside `(0, LATENT_TABLE_VALUE_MAX]` is refused): the sums over a slice stay far from

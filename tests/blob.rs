@@ -342,21 +342,29 @@ fn coded_table_round_trips_and_refuses_what_no_code_holds() {
 /// 33` more codes after the slices', a round trip bit-exact in either precision, an axis
 /// node outside the codes' range a `TableValueOutOfRange` at its index, bit 6 without bit
 /// 5 a header error.
-#[test]
-fn warped_table_round_trips_and_refuses_bad_axis_nodes() {
-    let m = random_table_model(8, TableGrid::WarpedCodes);
+/// A random model with a coded table on `grid`: `table_len` codes, the header's flag bits
+/// 4 and up as `flags` (the byte's high nibble), a round trip bit-exact in either precision.
+fn coded_table_round_trips(seed: u64, grid: TableGrid, table_len: usize, flags: u8) -> Model3x32 {
+    let m = random_table_model(seed, grid);
     let def = *m.def();
     let first_table = def.param_count() - def.table_len();
-    assert_eq!(def.table_len(), 32 * 33 * 33 + 2 * 33);
+    assert_eq!(def.table_len(), table_len);
     for precision in [Precision::F32, Precision::F16] {
         let bytes = blob_of(&m, precision);
-        assert_eq!(bytes[28] & 112, 112);
+        assert_eq!(bytes[28] & 0xf0, flags);
         let len = HEADER_LEN + first_table * precision.bytes() + def.table_len() + CHECKSUM_LEN;
         assert_eq!(bytes.len(), len, "{precision:?}");
         let back = Model3x32::from_blob(&bytes).unwrap();
-        assert_eq!(back.def().latent_table, Some(TableGrid::WarpedCodes));
+        assert_eq!(back.def().latent_table, Some(grid));
         assert_eq!(blob_of(&back, precision), bytes, "{precision:?} round trip");
     }
+    m
+}
+
+#[test]
+fn warped_table_round_trips_and_refuses_bad_axis_nodes() {
+    let m = coded_table_round_trips(8, TableGrid::WarpedCodes, 32 * 33 * 33 + 2 * 33, 112);
+    let def = *m.def();
     let index = def.param_count() - 5;
     let mut p = params_of(&m);
     p[index] = 1e-3;
@@ -371,6 +379,26 @@ fn warped_table_round_trips_and_refuses_bad_axis_nodes() {
         Model3x32::from_blob(&b),
         Err(BlobError::BadHeader(_))
     ));
+}
+
+/// The warped coded table on the blended layout's 40 slices (flag bits 4 to 7,
+/// docs/math.md, (82)): `40 x 33 x 33 + 2 x 33` codes, a round trip bit-exact in either
+/// precision; bit 7 without bit 6 a header error, and bit 7 cleared on such a blob leaves a
+/// parameter count the 32 slices do not fill, refused too.
+#[test]
+fn blended_slices_round_trip_and_need_warped_axes() {
+    let m = coded_table_round_trips(12, TableGrid::BlendedSlices, 40 * 33 * 33 + 2 * 33, 240);
+    let mut b = blob_of(&m, Precision::F32);
+    b[28] &= !64;
+    reseal(&mut b);
+    assert!(matches!(
+        Model3x32::from_blob(&b),
+        Err(BlobError::BadHeader(_))
+    ));
+    let mut b = blob_of(&m, Precision::F32);
+    b[28] &= !128;
+    reseal(&mut b);
+    assert!(Model3x32::from_blob(&b).is_err());
 }
 
 #[test]

@@ -65,6 +65,11 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
         "tiny half vector axes",
         Some(TableGrid::WarpedCodes),
     );
+    let blended_table = tiny_with_table(
+        Domain::HalfVector,
+        "tiny half vector blended",
+        Some(TableGrid::BlendedSlices),
+    );
     let opt = |language, float, weights, entry_points| Options {
         language,
         float,
@@ -153,6 +158,11 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
             "half_vector_axes_table_buffer.glsl",
             axes_table,
             opt(Language::Glsl, Float::F32, buf, EntryPoints::ALL),
+        ),
+        (
+            "half_vector_blended_table_buffer.h",
+            blended_table,
+            opt(Language::C, Float::F32, buf, EntryPoints::ALL),
         ),
         (
             "half_vector_all_f16_fused.wgsl",

@@ -17,8 +17,9 @@ use super::table_axes;
 use crate::def::Precision;
 use crate::math::{ln, sqrt};
 use crate::spec::{
-    LATENT_TABLE_CELLS, LATENT_TABLE_CODE_FRACTIONS, LATENT_TABLE_CODE_ONE,
-    LATENT_TABLE_CODE_STEPS, LATENT_TABLE_SLICES as S, LATENT_TABLE_VALUE_CELLS,
+    LATENT_TABLE_BLENDED_SLICES, LATENT_TABLE_CELLS, LATENT_TABLE_CODE_FRACTIONS,
+    LATENT_TABLE_CODE_ONE, LATENT_TABLE_CODE_STEPS, LATENT_TABLE_MAX_SLICES as MAX_SLICES,
+    LATENT_TABLE_SLICES, LATENT_TABLE_SLICE_BLEND, LATENT_TABLE_VALUE_CELLS,
     LATENT_TABLE_VALUE_MAX,
 };
 
@@ -33,8 +34,11 @@ pub enum TableGrid {
     Codes,
     /// The coded grid with its two axis warps (`crate::base::table_axes`, docs/math.md,
     /// (81)): after the slices' nodes, `2 (C + 1)` more codes, the nodes of `g_0` then
-    /// `g_1` (flag bits 4, 5 and 6). What the trainer writes.
+    /// `g_1` (flag bits 4, 5 and 6; the blobs written before the blended layout).
     WarpedCodes,
+    /// The warped coded grid on [`LATENT_TABLE_BLENDED_SLICES`] (40) incidence slices on the
+    /// blended layout (docs/math.md, (82); flag bits 4, 5, 6 and 7). What the trainer writes.
+    BlendedSlices,
 }
 
 impl TableGrid {
@@ -43,20 +47,54 @@ impl TableGrid {
     pub const fn cells(self) -> usize {
         match self {
             TableGrid::Values => LATENT_TABLE_VALUE_CELLS,
-            TableGrid::Codes | TableGrid::WarpedCodes => LATENT_TABLE_CELLS,
+            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => {
+                LATENT_TABLE_CELLS
+            }
         }
     }
 
     /// Whether each node is an 8-bit code.
     #[must_use]
     pub const fn is_coded(self) -> bool {
-        matches!(self, TableGrid::Codes | TableGrid::WarpedCodes)
+        !matches!(self, TableGrid::Values)
     }
 
     /// Whether the grid's axes are warped (docs/math.md, (81)).
     #[must_use]
     pub const fn is_warped(self) -> bool {
-        matches!(self, TableGrid::WarpedCodes)
+        matches!(self, TableGrid::WarpedCodes | TableGrid::BlendedSlices)
+    }
+
+    /// Whether the slices lie on the blended layout (docs/math.md, (82)).
+    #[must_use]
+    pub const fn is_blended(self) -> bool {
+        matches!(self, TableGrid::BlendedSlices)
+    }
+
+    /// Incidence slices.
+    #[must_use]
+    pub const fn slices(self) -> usize {
+        if self.is_blended() {
+            LATENT_TABLE_BLENDED_SLICES
+        } else {
+            LATENT_TABLE_SLICES
+        }
+    }
+
+    /// The slice position `s` in `[0, S - 1]` of `wi.z` (clamped to `[0, 1]`; NaN stays NaN):
+    /// `(1 - sqrt(wi.z)) (S - 1)` (75), or on the blended layout `x (b + (1 - b) x) (S - 1)`,
+    /// `x = sqrt(1 - sqrt(wi.z))` (82).
+    #[inline(always)]
+    #[must_use]
+    pub fn slice_position(self, wi_z: f32) -> f32 {
+        let root = sqrt(wi_z.clamp(0.0, 1.0));
+        let last = (self.slices() - 1) as f32;
+        if self.is_blended() {
+            let x = sqrt(1.0 - root);
+            x * (LATENT_TABLE_SLICE_BLEND + (1.0 - LATENT_TABLE_SLICE_BLEND) * x) * last
+        } else {
+            (1.0 - root) * last
+        }
     }
 
     /// Nodes per side: `cells + 1`.
@@ -76,7 +114,7 @@ impl TableGrid {
     /// [`Self::axis_len`]: the blob's order.
     #[must_use]
     pub const fn node_count(self) -> usize {
-        S * self.slice_len() + self.axis_len()
+        self.slices() * self.slice_len() + self.axis_len()
     }
 
     /// Nodes of the axis warps, `g_0` then `g_1`, `C + 1` each (0 where the grid has none).
@@ -94,7 +132,7 @@ impl TableGrid {
     pub const fn node_bytes(self, precision: Precision) -> usize {
         match self {
             TableGrid::Values => precision.bytes(),
-            TableGrid::Codes | TableGrid::WarpedCodes => 1,
+            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => 1,
         }
     }
 }
@@ -104,8 +142,9 @@ pub const MAX_NODES: usize = LATENT_TABLE_CELLS + 1;
 
 /// Bytes that hold either grid's nodes: one code per node, or four bytes of f32 per node.
 const STORE_LEN: usize = {
-    let codes = S * MAX_NODES * MAX_NODES + 2 * MAX_NODES;
-    let values = S * (LATENT_TABLE_VALUE_CELLS + 1) * (LATENT_TABLE_VALUE_CELLS + 1) * 4;
+    let codes = MAX_SLICES * MAX_NODES * MAX_NODES + 2 * MAX_NODES;
+    let values =
+        LATENT_TABLE_SLICES * (LATENT_TABLE_VALUE_CELLS + 1) * (LATENT_TABLE_VALUE_CELLS + 1) * 4;
     if codes > values {
         codes
     } else {
@@ -168,7 +207,7 @@ pub struct LatentTable {
     /// `j` ascending), derived from the nodes by [`LatentTable::prepare`]: a call mixes 2 x
     /// `(C + 1)` of them instead of summing 2 x `(C + 1)^2` nodes. The generated code sums
     /// them per call in the same order, so both hold the same bits.
-    columns: [f32; S * MAX_NODES],
+    columns: [f32; MAX_SLICES * MAX_NODES],
     /// The axis warps' nodes `g_0`, `g_1` (docs/math.md, (81)); every node 1 (the identity)
     /// where the grid has none.
     axes: [[f32; MAX_NODES]; 2],
@@ -185,31 +224,42 @@ pub(crate) struct TableSlice {
 }
 
 impl TableSlice {
-    /// The slices of `wi.z`: `s = (1 - sqrt(wi.z)) (S - 1)`, `k = min(floor(s), S - 2)`,
-    /// `t = s - k` (docs/math.md, (75)); `wi.z` is clamped to `[0, 1]`.
+    /// The slices of `wi.z` on `grid`: `s` = [`TableGrid::slice_position`], `k = min(floor(s),
+    /// S - 2)`, `t = s - k` (docs/math.md, (75), (82)); `wi.z` is clamped to `[0, 1]`.
     #[inline]
     #[must_use]
-    pub(crate) fn of(wi_z: f32) -> Self {
-        let s = (1.0 - sqrt(wi_z.clamp(0.0, 1.0))) * (S - 1) as f32;
-        let k = (s as usize).min(S - 2);
+    pub(crate) fn of(grid: TableGrid, wi_z: f32) -> Self {
+        let s = grid.slice_position(wi_z);
+        let k = (s as usize).min(grid.slices() - 2);
         TableSlice { k, t: s - k as f32 }
     }
 }
 
-/// The two slices a `wi` with `wi.z` mixes, as the kernel mixes them: the lower slice `k`
-/// and the weight `t` of slice `k + 1` (docs/math.md, (75)).
+/// The two slices a `wi` with `wi.z` mixes on `grid`, as the kernel mixes them: the lower
+/// slice `k` and the weight `t` of slice `k + 1` (docs/math.md, (75)).
 #[must_use]
-pub fn slice_pair(wi_z: f32) -> (usize, f32) {
-    let sl = TableSlice::of(wi_z);
+pub fn slice_pair(grid: TableGrid, wi_z: f32) -> (usize, f32) {
+    let sl = TableSlice::of(grid, wi_z);
     (sl.k, sl.t)
 }
 
-/// `wi.z` at the slice position `s` (in slices, `0 ..= S - 1`): the inverse of
-/// the slices' `s = (1 - sqrt(wi.z)) (S - 1)`, `wi.z = (1 - s / (S - 1))^2`.
+/// `wi.z` at the slice position `s` (in slices, `0 ..= S - 1`) on `grid`: the inverse of
+/// [`TableGrid::slice_position`], `wi.z = (1 - f)^2` with `f = s / (S - 1)` (75), or on the
+/// blended layout `wi.z = (1 - x^2)^2` with `x` the root of `(1 - b) x^2 + b x = f` (82).
 #[must_use]
-pub fn slice_incidence(s: f64) -> f64 {
-    let f = (s / (S - 1) as f64).clamp(0.0, 1.0);
-    (1.0 - f) * (1.0 - f)
+pub fn slice_incidence(grid: TableGrid, s: f64) -> f64 {
+    let f = (s / (grid.slices() - 1) as f64).clamp(0.0, 1.0);
+    let root = if grid.is_blended() {
+        let (b, c) = (
+            f64::from(LATENT_TABLE_SLICE_BLEND),
+            1.0 - f64::from(LATENT_TABLE_SLICE_BLEND),
+        );
+        let x = (libm::sqrt(b * b + 4.0 * c * f) - b) / (2.0 * c);
+        1.0 - x * x
+    } else {
+        1.0 - f
+    };
+    root * root
 }
 
 /// `0.5` at the grid's two ends, `1` inside: the trapezoid rule's weight of node `i` along
@@ -299,7 +349,7 @@ impl LatentTable {
         grid: TableGrid::Codes,
         store: [LATENT_TABLE_CODE_ONE; STORE_LEN],
         code_values: CODE_VALUES_F32,
-        columns: [LATENT_TABLE_CELLS as f32; S * MAX_NODES],
+        columns: [LATENT_TABLE_CELLS as f32; MAX_SLICES * MAX_NODES],
         axes: [[1.0; MAX_NODES]; 2],
         axis_totals: [LATENT_TABLE_CELLS as f32; 2],
     };
@@ -310,11 +360,17 @@ impl LatentTable {
         self.grid.cells()
     }
 
+    /// The two slices `wi.z` mixes on this table's layout.
+    #[inline(always)]
+    pub(crate) fn slice(&self, wi_z: f32) -> TableSlice {
+        TableSlice::of(self.grid, wi_z)
+    }
+
     /// Node `n` in blob order.
     #[inline(always)]
     fn value(&self, n: usize) -> f32 {
         match self.grid {
-            TableGrid::Codes | TableGrid::WarpedCodes => self
+            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => self
                 .store
                 .get(n)
                 .map_or(1.0, |&c| self.code_values[usize::from(c)]),
@@ -332,7 +388,9 @@ impl LatentTable {
     pub(crate) fn accepts(grid: TableGrid, value: f32) -> bool {
         match grid {
             TableGrid::Values => value > 0.0 && value <= LATENT_TABLE_VALUE_MAX,
-            TableGrid::Codes | TableGrid::WarpedCodes => encode(value).is_some(),
+            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => {
+                encode(value).is_some()
+            }
         }
     }
 
@@ -348,7 +406,7 @@ impl LatentTable {
         self.grid = grid;
         self.code_values = code_values(precision);
         match grid {
-            TableGrid::Codes | TableGrid::WarpedCodes => {
+            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => {
                 for c in self.store.iter_mut().take(grid.node_count()) {
                     *c = encode(next()).unwrap_or(LATENT_TABLE_CODE_ONE);
                 }
@@ -365,7 +423,7 @@ impl LatentTable {
     /// Derives the column integrals and the axis warps from the nodes.
     fn prepare(&mut self) {
         let (cells, nodes) = (self.cells(), self.grid.nodes());
-        let first_axis = S * self.grid.slice_len();
+        let first_axis = self.grid.slices() * self.grid.slice_len();
         for a in 0..2 {
             for i in 0..MAX_NODES {
                 self.axes[a][i] = if self.grid.is_warped() && i < nodes {
@@ -376,7 +434,7 @@ impl LatentTable {
             }
             self.axis_totals[a] = total(&self.axes[a], cells);
         }
-        for k in 0..S {
+        for k in 0..self.grid.slices() {
             for i in 0..nodes {
                 let first = k * self.grid.slice_len() + i * nodes;
                 let mut sum = 0.0;
@@ -500,7 +558,12 @@ mod tests {
         t
     }
 
-    const GRIDS: [TableGrid; 3] = [TableGrid::Codes, TableGrid::Values, TableGrid::WarpedCodes];
+    const GRIDS: [TableGrid; 4] = [
+        TableGrid::Codes,
+        TableGrid::Values,
+        TableGrid::WarpedCodes,
+        TableGrid::BlendedSlices,
+    ];
 
     fn density(t: &LatentTable, sl: TableSlice, x: [f32; 2]) -> f64 {
         f64::from(t.ln_density(sl, x)).exp()
@@ -511,7 +574,7 @@ mod tests {
         for grid in GRIDS {
             let t = bumpy(grid);
             for wi_z in [1.0, 0.7, 0.2, 0.013, 0.0] {
-                let sl = TableSlice::of(wi_z);
+                let sl = TableSlice::of(grid, wi_z);
                 let n = 400;
                 let mut sum = 0.0;
                 for a in 0..n {
@@ -533,7 +596,7 @@ mod tests {
     fn the_warp_is_increasing_and_its_jacobian_is_the_density() {
         for grid in GRIDS {
             let t = bumpy(grid);
-            let sl = TableSlice::of(0.4);
+            let sl = TableSlice::of(grid, 0.4);
             let h = 1e-3f32;
             for a in 1..40 {
                 for b in 1..40 {
@@ -560,7 +623,7 @@ mod tests {
     #[test]
     fn the_uniform_table_is_the_identity() {
         let t = LatentTable::UNIFORM;
-        let sl = TableSlice::of(0.5);
+        let sl = TableSlice::of(TableGrid::Codes, 0.5);
         for a in 0..=20 {
             for b in 0..=20 {
                 let u = [a as f32 / 20.0, b as f32 / 20.0];
@@ -573,17 +636,49 @@ mod tests {
 
     #[test]
     fn slices_cover_normal_to_grazing_incidence() {
-        assert_eq!(TableSlice::of(1.0), TableSlice { k: 0, t: 0.0 });
-        let g = TableSlice::of(0.0);
-        assert_eq!((g.k, g.t), (S - 2, 1.0));
-        assert_eq!(TableSlice::of(f32::NAN).k, 0);
+        for grid in GRIDS {
+            assert_eq!(TableSlice::of(grid, 1.0), TableSlice { k: 0, t: 0.0 });
+            let g = TableSlice::of(grid, 0.0);
+            assert_eq!((g.k, g.t), (grid.slices() - 2, 1.0));
+            assert_eq!(TableSlice::of(grid, f32::NAN).k, 0);
+        }
+        assert_eq!(TableGrid::WarpedCodes.slices(), 32);
+        assert_eq!(TableGrid::BlendedSlices.slices(), 40);
+    }
+
+    /// `slice_incidence` inverts the slice position on both layouts; the blended one puts
+    /// its first slice within 6 degrees of the normal (the even one at 20.5) and keeps its
+    /// slices past 80 degrees at most 1.6 degrees apart, as the even one.
+    #[test]
+    fn slice_positions_invert_and_the_blended_layout_is_dense_at_both_ends() {
+        for grid in [TableGrid::WarpedCodes, TableGrid::BlendedSlices] {
+            let last = (grid.slices() - 1) as f64;
+            for i in 0..=1000 {
+                let s = last * f64::from(i) / 1000.0;
+                let z = slice_incidence(grid, s);
+                let back = f64::from(grid.slice_position(z as f32));
+                assert!((back - s).abs() < 2e-3 * last, "{grid:?} s {s}: {back}");
+            }
+            let theta = |k: usize| libm::acos(slice_incidence(grid, k as f64)).to_degrees();
+            let first = theta(1);
+            let widest_past_80 = (1..grid.slices())
+                .filter(|&k| theta(k) > 80.0)
+                .map(|k| theta(k) - theta(k - 1))
+                .fold(0.0, f64::max);
+            if grid.is_blended() {
+                assert!(first < 6.0, "{first}");
+            } else {
+                assert!(first > 20.0, "{first}");
+            }
+            assert!(widest_past_80 < 1.6, "{grid:?}: {widest_past_80}");
+        }
     }
 
     #[test]
     fn the_edges_of_the_square_map_to_its_edges() {
         for grid in GRIDS {
             let t = bumpy(grid);
-            let sl = TableSlice::of(0.1);
+            let sl = TableSlice::of(grid, 0.1);
             assert_eq!(t.warp(sl, [0.0, 0.0]), [0.0, 0.0]);
             let x = t.warp(sl, [1.0, 1.0]);
             assert!(x[0] > 0.99999 && x[1] > 0.99999, "{x:?}");

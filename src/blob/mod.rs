@@ -205,24 +205,29 @@ impl RawHeader {
         })
     }
 
-    /// The latent table's grid from flag bits 4, 5 and 6 (bit 5 without bit 4, or bit 6
-    /// without bit 5, is an error).
+    /// The latent table's grid from flag bits 4, 5, 6 and 7 (bit 5 without bit 4, bit 6
+    /// without bit 5, or bit 7 without bit 6, is an error).
     fn table_grid(&self) -> Result<Option<TableGrid>, BlobError> {
+        let blended = self.flags & FLAG_BLENDED_SLICES != 0;
         match (
             self.flags & FLAG_LATENT_TABLE != 0,
             self.flags & FLAG_CODED_TABLE != 0,
             self.flags & FLAG_WARPED_TABLE != 0,
         ) {
-            (false, false, false) => Ok(None),
-            (true, false, false) => Ok(Some(TableGrid::Values)),
-            (true, true, false) => Ok(Some(TableGrid::Codes)),
-            (true, true, true) => Ok(Some(TableGrid::WarpedCodes)),
             (false, true, _) => Err(BlobError::BadHeader(
                 "a coded latent table without a latent table",
             )),
             (_, false, true) => Err(BlobError::BadHeader(
                 "warped axes without a coded latent table",
             )),
+            (_, _, false) if blended => {
+                Err(BlobError::BadHeader("blended slices without warped axes"))
+            }
+            (false, false, false) => Ok(None),
+            (true, false, false) => Ok(Some(TableGrid::Values)),
+            (true, true, false) => Ok(Some(TableGrid::Codes)),
+            (true, true, true) if blended => Ok(Some(TableGrid::BlendedSlices)),
+            (true, true, true) => Ok(Some(TableGrid::WarpedCodes)),
         }
     }
 
@@ -236,6 +241,7 @@ impl RawHeader {
             | FLAG_STANDARD_WARP
             | FLAG_LATENT_TABLE
             | FLAG_CODED_TABLE
+            | FLAG_BLENDED_SLICES
             | FLAG_WARPED_TABLE;
         if self.flags & !known != 0 {
             return Err(BlobError::BadHeader("unknown flag bits are set"));
@@ -326,6 +332,10 @@ pub(crate) const FLAG_CODED_TABLE: u32 = 32;
 /// slices' ([`TableGrid::WarpedCodes`], docs/math.md, (81); only with
 /// [`FLAG_CODED_TABLE`]).
 pub(crate) const FLAG_WARPED_TABLE: u32 = 64;
+/// Header flag: the warped coded table has [`crate::spec::LATENT_TABLE_BLENDED_SLICES`]
+/// incidence slices on the blended layout ([`TableGrid::BlendedSlices`], docs/math.md, (82);
+/// only with [`FLAG_WARPED_TABLE`]).
+pub(crate) const FLAG_BLENDED_SLICES: u32 = 128;
 /// Header flag: the model is defined for `wi` above the surface only
 /// ([`IncidentRange::UpperHemisphere`]); implied on the disk, written there too.
 pub(crate) const FLAG_UPPER_HEMISPHERE: u32 = 2;

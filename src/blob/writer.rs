@@ -1,9 +1,9 @@
 //! Writes a blob into a caller's buffer (no allocation, so it works in `no_std` too).
 
 use super::{
-    body_len, crc32, BlobError, CHECKSUM_LEN, FLAG_CODED_TABLE, FLAG_ISOTROPIC, FLAG_LATENT_TABLE,
-    FLAG_STANDARDIZED, FLAG_STANDARD_WARP, FLAG_UPPER_HEMISPHERE, FLAG_WARPED_TABLE, HEADER_LEN,
-    MAGIC, VERSION,
+    body_len, crc32, BlobError, CHECKSUM_LEN, FLAG_BLENDED_SLICES, FLAG_CODED_TABLE,
+    FLAG_ISOTROPIC, FLAG_LATENT_TABLE, FLAG_STANDARDIZED, FLAG_STANDARD_WARP,
+    FLAG_UPPER_HEMISPHERE, FLAG_WARPED_TABLE, HEADER_LEN, MAGIC, VERSION,
 };
 use crate::base::table::{encode, TableGrid};
 use crate::def::IncidentRange;
@@ -147,6 +147,9 @@ fn write_header(def: &ModelDef, h: &mut [u8]) {
         }
         if grid.is_warped() {
             flags |= FLAG_WARPED_TABLE;
+        }
+        if grid.is_blended() {
+            flags |= FLAG_BLENDED_SLICES;
         }
     }
     h[28..32].copy_from_slice(&flags.to_le_bytes());

@@ -54,7 +54,7 @@ impl<
         Conditioned {
             cond: self.velocity.condition(&enc),
             base,
-            slice: TableSlice::of(wi.z),
+            slice: self.table.slice(wi.z),
         }
     }
 

@@ -19,7 +19,6 @@ use diffbsdf::internals::base::table::{
     code_value_f32, encode, slice_incidence, slice_pair, total, trapezoid, MAX_NODES,
 };
 use diffbsdf::internals::base::table_axes;
-use diffbsdf::spec::LATENT_TABLE_SLICES as S;
 use diffbsdf::{AnyModel, ModelDef, Sample, TableGrid};
 use diffbsdf_ffi::slices::sample_batch;
 use diffbsdf_materials::{DVec3, Material};
@@ -29,8 +28,9 @@ use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
 /// The grid the trainer fits: 32 cells per side, nodes stored as 8-bit codes, axes warped
-/// (or not: [`TableConfig::axes`]).
-const GRID: TableGrid = TableGrid::WarpedCodes;
+/// (or not: [`TableConfig::axes`]), on 40 slices of the blended layout (or the 32 of
+/// before: [`TableConfig::blended_slices`]).
+const GRID: TableGrid = TableGrid::BlendedSlices;
 /// Cells per side.
 const C: usize = GRID.cells();
 /// Nodes per side.
@@ -57,6 +57,11 @@ pub struct TableConfig {
     /// Shares of the fitted axis warps tried, each blended with even cells (`s g + 1 -
     /// s`), the one that leaves the least variance on held-out draws kept (0: even cells).
     pub axis_shares: &'static [f64],
+    /// Whether the table has the 40 slices of the blended layout (docs/math.md, (82),
+    /// [`TableGrid::BlendedSlices`]; its axes stored even where they are not warped); the
+    /// 32 slices of (75) otherwise ([`TableGrid::WarpedCodes`], or [`TableGrid::Codes`]
+    /// without warped axes).
+    pub blended_slices: bool,
 }
 
 impl TableConfig {
@@ -72,6 +77,7 @@ impl TableConfig {
         joint_iterations: 10,
         axes: true,
         axis_shares: &[0.0, 0.25, 0.5, 0.75, 1.0],
+        blended_slices: true,
     };
     /// No table.
     pub const OFF: TableConfig = TableConfig {
@@ -81,7 +87,20 @@ impl TableConfig {
         joint_iterations: 0,
         axes: false,
         axis_shares: &[0.0],
+        blended_slices: false,
     };
+
+    /// The grid whose slices the draws are placed on: [`TableGrid::BlendedSlices`] or, with
+    /// the 32 slices of (75), [`TableGrid::WarpedCodes`] (the same slices as
+    /// [`TableGrid::Codes`]).
+    #[must_use]
+    pub const fn layout(&self) -> TableGrid {
+        if self.blended_slices {
+            TableGrid::BlendedSlices
+        } else {
+            TableGrid::WarpedCodes
+        }
+    }
 }
 
 /// What the fit did, on its own draws: the relative variance `E[q^2] / E[q]^2 - 1` of the
@@ -111,7 +130,7 @@ pub fn fit_latent_table(
         return Err(TrainError::Mismatch);
     }
     let flow = without_table(model)?;
-    let draws: Vec<Vec<SliceDraw>> = (0..S)
+    let draws: Vec<Vec<SliceDraw>> = (0..cfg.layout().slices())
         .into_par_iter()
         .map(|k| slice_draws(&flow, material, cfg, seed, k))
         .collect();
@@ -135,12 +154,21 @@ pub fn fit_latent_table(
     let mut params = vec![0.0f32; flow.def().param_count()];
     flow.params(&mut params).map_err(TrainError::Blob)?;
     params.extend(stored.into_iter().flatten());
-    let grid = match axes {
-        Some(axes) => {
+    let grid = match (axes, cfg.blended_slices) {
+        (Some(axes), blended) => {
             params.extend(axes.iter().flat_map(|g| g.iter().take(NODES).copied()));
+            if blended {
+                GRID
+            } else {
+                TableGrid::WarpedCodes
+            }
+        }
+        (None, true) => {
+            // Even cells: every axis node 1, the identity warp.
+            params.extend([1.0f32; 2 * NODES]);
             GRID
         }
-        None => TableGrid::Codes,
+        (None, false) => TableGrid::Codes,
     };
     debug_assert_eq!(params.len(), flow.def().param_count() + grid.node_count());
     let table_def = ModelDef {
@@ -579,7 +607,7 @@ fn slice_draws(
         points.clear();
         mix.clear();
         for _ in 0..n {
-            let (wi, u, m) = slice_point(&mut rng, k, isotropic);
+            let (wi, u, m) = slice_point(&mut rng, cfg.layout(), k, isotropic);
             incidences.push(wi);
             points.push(u);
             mix.push(m);
@@ -605,12 +633,18 @@ fn slice_draws(
     draws
 }
 
-/// One draw's incidence (from slice `k`'s hat in incidence, reflected at the ends) and its
-/// uniform `u`.
-fn slice_point(rng: &mut Pcg64, k: usize, isotropic: bool) -> (DVec3, [f64; 2], (usize, f64)) {
+/// One draw's incidence (from slice `k`'s hat in incidence on `layout`'s slices, reflected
+/// at the ends) and its uniform `u`.
+fn slice_point(
+    rng: &mut Pcg64,
+    layout: TableGrid,
+    k: usize,
+    isotropic: bool,
+) -> (DVec3, [f64; 2], (usize, f64)) {
+    let last = (layout.slices() - 1) as f64;
     let s = k as f64 + rng.gen::<f64>() - rng.gen::<f64>();
-    let s = (s.abs()).min(2.0 * (S - 1) as f64 - s.abs());
-    let z = slice_incidence(s).max(1e-4);
+    let s = (s.abs()).min(2.0 * last - s.abs());
+    let z = slice_incidence(layout, s).max(1e-4);
     let phi = if isotropic {
         0.0
     } else {
@@ -618,7 +652,7 @@ fn slice_point(rng: &mut Pcg64, k: usize, isotropic: bool) -> (DVec3, [f64; 2], 
     };
     let r = (1.0 - z * z).max(0.0).sqrt();
     let wi = DVec3::new(r * phi.cos(), r * phi.sin(), z);
-    let (lo, t) = slice_pair(z as f32);
+    let (lo, t) = slice_pair(layout, z as f32);
     (wi, [rng.gen::<f64>(), rng.gen::<f64>()], (lo, f64::from(t)))
 }
 
@@ -688,12 +722,13 @@ fn descend(v: &mut [f64], draws: &[SliceDraw], floor: f64) {
 /// the update of `k` reads the draws of `k - 1 ..= k + 1`.
 fn joint_descend(draws: &[Vec<SliceDraw>], values: &mut [Vec<f64>], floor: f64) {
     let totals: Vec<f64> = values.iter().map(|v| integral(v)).collect();
-    let updated: Vec<Vec<f64>> = (0..S)
+    let slices = values.len();
+    let updated: Vec<Vec<f64>> = (0..slices)
         .into_par_iter()
         .map(|k| {
             let mut toward = vec![0.0f64; SLICE_LEN];
             let mut whole = 0.0;
-            let near = k.saturating_sub(1)..=(k + 1).min(S - 1);
+            let near = k.saturating_sub(1)..=(k + 1).min(slices - 1);
             for d in draws[near].iter().flatten() {
                 let (lo, hi) = (d.lo, d.lo + 1);
                 if lo != k && hi != k {
@@ -735,6 +770,7 @@ fn joint_descend(draws: &[Vec<SliceDraw>], values: &mut [Vec<f64>], floor: f64) 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use diffbsdf::spec::LATENT_TABLE_SLICES as S;
 
     /// `E[q^2 / T]` over the draws for the node values `v` (the quantity (78) lowers).
     fn second_moment(v: &[f64], draws: &[SliceDraw], floor: f64) -> f64 {

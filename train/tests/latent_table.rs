@@ -35,7 +35,7 @@ fn the_table_lowers_the_measured_variance_and_stays_exact() {
     );
     assert_eq!(
         tabled.def().latent_table,
-        Some(diffbsdf::TableGrid::WarpedCodes)
+        Some(diffbsdf::TableGrid::BlendedSlices)
     );
 
     // Through the blob and back, and without the table again.

@@ -39,6 +39,11 @@ pub struct TableArgs {
     /// Keep the grid's cells evenly spaced (no axis warps, docs/math.md, (81)).
     #[arg(long)]
     pub no_axes: bool,
+    /// The 32 slices evenly spaced in `1 - sqrt(wi.z)` (docs/math.md, (75)) instead of the
+    /// 40 of the blended layout ((82)): the tables written before it (with `--no-axes`, the
+    /// even-cell ones).
+    #[arg(long)]
+    pub even_slices: bool,
     /// Seed of the draws.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -55,6 +60,7 @@ pub fn run(args: TableArgs, out: &mut dyn std::io::Write) -> Result<(), CommandE
         iterations: args.iterations,
         joint_iterations: args.joint_iterations,
         axes: !args.no_axes,
+        blended_slices: !args.even_slices,
         ..TableConfig::DEFAULT
     };
     let start = Instant::now();

@@ -5,7 +5,7 @@
 
 use super::Emitter;
 use crate::dialect::{Math, T};
-use diffbsdf::spec::{ERFC_POLY, LATENT_TABLE_SLICES as S};
+use diffbsdf::spec::{ERFC_POLY, LATENT_TABLE_SLICE_BLEND};
 use diffbsdf::TableGrid;
 
 impl Emitter<'_> {
@@ -34,6 +34,11 @@ impl Emitter<'_> {
         self.table_grid().nodes()
     }
 
+    /// Incidence slices of the table.
+    fn table_slice_count(&self) -> usize {
+        self.table_grid().slices()
+    }
+
     /// Nodes per slice.
     fn table_slice_len(&self) -> usize {
         self.table_grid().slice_len()
@@ -44,22 +49,31 @@ impl Emitter<'_> {
         self.m.def.param_count() - self.m.def.table_len()
     }
 
-    /// The slices of `wi.z = enc.e[2]` into `r.tk`, `r.tt` (docs/math.md, (75)); inside
-    /// `condition`.
+    /// The slices of `wi.z = enc.e[2]` into `r.tk`, `r.tt` (docs/math.md, (75), (82));
+    /// inside `condition`.
     pub(super) fn table_slices(&mut self) {
-        self.code
-            .line("// The latent table's two slices for wi.z and the second's weight (docs/math.md, (75)).");
+        let slices = self.table_slice_count();
         let (zero, one) = (self.f(0.0), self.f(1.0));
         let z = self.d.clamp("enc.e[2]", &zero, &one);
         let root = self.math(Math::Sqrt, &z);
-        self.decl(
-            T::F,
-            "ts",
-            &format!("({one} - {root}) * {}", self.f((S - 1) as f32)),
-        );
+        let last = self.f((slices - 1) as f32);
+        if self.table_grid().is_blended() {
+            self.code.line(
+                "// The latent table's two slices for wi.z on the blended layout, s = x (b + (1 - b) x) (S - 1), x = sqrt(1 - sqrt(wi.z)), and the second's weight (docs/math.md, (75), (82)).",
+            );
+            let x = self.math(Math::Sqrt, &format!("{one} - {root}"));
+            self.decl(T::F, "tx", &x);
+            let b = self.f(LATENT_TABLE_SLICE_BLEND);
+            let c = self.f(1.0 - LATENT_TABLE_SLICE_BLEND);
+            self.decl(T::F, "ts", &format!("tx * ({b} + {c} * tx) * {last}"));
+        } else {
+            self.code
+                .line("// The latent table's two slices for wi.z and the second's weight (docs/math.md, (75)).");
+            self.decl(T::F, "ts", &format!("({one} - {root}) * {last}"));
+        }
         self.code
             .line(format!("r.tk = {};", self.d.cast(&T::U, "ts")));
-        let last = self.u(S - 2);
+        let last = self.u(slices - 2);
         self.code.open(format!("if (r.tk > {last}) {{"));
         self.code.line(format!("r.tk = {last};"));
         self.code.close("}");
@@ -355,7 +369,7 @@ impl Emitter<'_> {
         let r = self.d.decl(&cols_t, "r", None);
         self.code.line(r);
         let nodes = self.table_nodes();
-        let first = self.table_offset() + S * self.table_slice_len();
+        let first = self.table_offset() + self.table_slice_count() * self.table_slice_len();
         self.for_open("gi", &self.u(nodes));
         let g = self
             .d

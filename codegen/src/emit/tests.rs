@@ -8,10 +8,10 @@ use diffbsdf::spec::ERFC_POLY;
 use diffbsdf::spec::{
     BASE_OUTPUTS, DET_REUSE_TOL, DET_SECANT_TOL, ENCODING_PER_FREQ, ENCODING_RAW, ERFINV_BRANCH_W,
     ERFINV_CENTRAL, ERFINV_CENTRAL_SHIFT, ERFINV_TAIL, ERFINV_TAIL_SHIFT, EXP_ARG_LIMIT_F16,
-    EXP_ARG_MAX, EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LATENT_TABLE_CELLS, LATENT_TABLE_SLICES,
-    LATENT_TABLE_VALUE_CELLS, LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI, LN_SCALE_MAX,
-    LN_SCALE_MIN, NEWTON_MAX_ITERS, NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO,
-    STANDARD_WARP_K, UNIT_TOLERANCE, VELOCITY_OUTPUTS,
+    EXP_ARG_MAX, EXP_ARG_MIN, GAUSSIAN_TAIL_MIN, LATENT_TABLE_CELLS, LATENT_TABLE_VALUE_CELLS,
+    LINE_SEARCH_HALVINGS, LN_4PI, LN_INV_SQRT_2PI, LN_SCALE_MAX, LN_SCALE_MIN, NEWTON_MAX_ITERS,
+    NEWTON_TOL, NEWTON_TOL_F16, NORMAL_INCIDENCE_RHO, STANDARD_WARP_K, UNIT_TOLERANCE,
+    VELOCITY_OUTPUTS,
 };
 use diffbsdf::{Domain, ModelDef, TableGrid};
 
@@ -41,8 +41,18 @@ fn outputs() -> Vec<Output> {
     value_table.latent_table = Some(TableGrid::Values);
     let mut axes_table = warped;
     axes_table.latent_table = Some(TableGrid::WarpedCodes);
+    let mut blended_table = warped;
+    blended_table.latent_table = Some(TableGrid::BlendedSlices);
     let mut out = Vec::new();
-    for def in [disk, sphere, warped, table, value_table, axes_table] {
+    for def in [
+        disk,
+        sphere,
+        warped,
+        table,
+        value_table,
+        axes_table,
+        blended_table,
+    ] {
         let bytes = blob(&def);
         for language in [Language::Glsl, Language::Wgsl, Language::C] {
             for float in [Float::F32, Float::F16] {
@@ -60,6 +70,7 @@ fn outputs() -> Vec<Output> {
                             Some(TableGrid::Codes) => " table",
                             Some(TableGrid::Values) => " value table",
                             Some(TableGrid::WarpedCodes) => " warped table",
+                            Some(TableGrid::BlendedSlices) => " blended table",
                             None => "",
                         }
                     ),
@@ -206,8 +217,8 @@ fn warp_scale_is_the_kernels() {
         .into_iter()
         .filter(|o| o.def.standard_warp)
         .collect();
-    // The warped model and the three with a latent table, in five outputs each.
-    assert_eq!(warped.len(), 20);
+    // The warped model and the four with a latent table, in five outputs each.
+    assert_eq!(warped.len(), 25);
     for o in warped {
         // The first line of each is `a = |z| / K`, `s = y / K` or `a = |y| / K`.
         for name in ["warp_compress", "warp_expand", "warp_ln_expansion"] {
@@ -293,7 +304,9 @@ fn latent_table_layout_and_cdf_are_the_kernels() {
         };
         seen += 1;
         let want_cells = match grid {
-            TableGrid::Codes | TableGrid::WarpedCodes => LATENT_TABLE_CELLS,
+            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => {
+                LATENT_TABLE_CELLS
+            }
             TableGrid::Values => LATENT_TABLE_VALUE_CELLS,
         };
         let b = body(o, "normal_cdf");
@@ -319,12 +332,7 @@ fn latent_table_layout_and_cdf_are_the_kernels() {
         );
         let b = body(o, "condition");
         let slices = line(o, &b, "if (r.tk >");
-        assert_eq!(
-            uints(slices),
-            [LATENT_TABLE_SLICES as u32 - 2],
-            "{}",
-            o.label
-        );
+        assert_eq!(uints(slices), [grid.slices() as u32 - 2], "{}", o.label);
         let b = body(o, "table_ln_density");
         let mut cells = 0;
         for l in b.iter().filter(|l| l.starts_with("if (")) {
@@ -343,7 +351,7 @@ fn latent_table_layout_and_cdf_are_the_kernels() {
             let b = body(o, "table_axis");
             let at = b.iter().copied().find(|l| l.contains("ax *"));
             let at = at.unwrap_or_else(|| panic!("{}: no axis offset", o.label));
-            let slices = (LATENT_TABLE_SLICES * (want_cells + 1) * (want_cells + 1)) as u32;
+            let slices = (grid.slices() * (want_cells + 1) * (want_cells + 1)) as u32;
             assert_eq!(
                 uints(at),
                 [offset + slices, want_cells as u32 + 1],
@@ -352,5 +360,5 @@ fn latent_table_layout_and_cdf_are_the_kernels() {
             );
         }
     }
-    assert_eq!(seen, 15, "the table models in every language and precision");
+    assert_eq!(seen, 20, "the table models in every language and precision");
 }
