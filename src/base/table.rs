@@ -45,11 +45,10 @@ impl TableGrid {
     /// Cells per side.
     #[must_use]
     pub const fn cells(self) -> usize {
-        match self {
-            TableGrid::Values => LATENT_TABLE_VALUE_CELLS,
-            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => {
-                LATENT_TABLE_CELLS
-            }
+        if self.is_coded() {
+            LATENT_TABLE_CELLS
+        } else {
+            LATENT_TABLE_VALUE_CELLS
         }
     }
 
@@ -130,9 +129,10 @@ impl TableGrid {
     /// Bytes one node takes in a blob of `precision`.
     #[must_use]
     pub const fn node_bytes(self, precision: Precision) -> usize {
-        match self {
-            TableGrid::Values => precision.bytes(),
-            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => 1,
+        if self.is_coded() {
+            1
+        } else {
+            precision.bytes()
         }
     }
 }
@@ -369,16 +369,15 @@ impl LatentTable {
     /// Node `n` in blob order.
     #[inline(always)]
     fn value(&self, n: usize) -> f32 {
-        match self.grid {
-            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => self
-                .store
+        if self.grid.is_coded() {
+            self.store
                 .get(n)
-                .map_or(1.0, |&c| self.code_values[usize::from(c)]),
-            TableGrid::Values => self
-                .store
+                .map_or(1.0, |&c| self.code_values[usize::from(c)])
+        } else {
+            self.store
                 .get(4 * n..4 * n + 4)
                 .and_then(|b| b.try_into().ok())
-                .map_or(1.0, f32::from_le_bytes),
+                .map_or(1.0, f32::from_le_bytes)
         }
     }
 
@@ -386,11 +385,10 @@ impl LatentTable {
     /// in `(0, LATENT_TABLE_VALUE_MAX]`, and on the coded grid within the codes' range.
     #[must_use]
     pub(crate) fn accepts(grid: TableGrid, value: f32) -> bool {
-        match grid {
-            TableGrid::Values => value > 0.0 && value <= LATENT_TABLE_VALUE_MAX,
-            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => {
-                encode(value).is_some()
-            }
+        if grid.is_coded() {
+            encode(value).is_some()
+        } else {
+            value > 0.0 && value <= LATENT_TABLE_VALUE_MAX
         }
     }
 
@@ -405,16 +403,13 @@ impl LatentTable {
     ) {
         self.grid = grid;
         self.code_values = code_values(precision);
-        match grid {
-            TableGrid::Codes | TableGrid::WarpedCodes | TableGrid::BlendedSlices => {
-                for c in self.store.iter_mut().take(grid.node_count()) {
-                    *c = encode(next()).unwrap_or(LATENT_TABLE_CODE_ONE);
-                }
+        if grid.is_coded() {
+            for c in self.store.iter_mut().take(grid.node_count()) {
+                *c = encode(next()).unwrap_or(LATENT_TABLE_CODE_ONE);
             }
-            TableGrid::Values => {
-                for b in self.store.chunks_exact_mut(4).take(grid.node_count()) {
-                    b.copy_from_slice(&next().to_le_bytes());
-                }
+        } else {
+            for b in self.store.chunks_exact_mut(4).take(grid.node_count()) {
+                b.copy_from_slice(&next().to_le_bytes());
             }
         }
         self.prepare();
