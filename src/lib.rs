@@ -16,8 +16,10 @@
 //! ```
 //!
 //! ## Contract
-//! - `no_std`, no allocator, no `unsafe` (with the optional `fma` feature: one call of the
-//!   CPU's fused multiply-add intrinsic, in `math::mul_add`).
+//! - `no_std`, no allocator; `unsafe` only for two CPU intrinsics on x86-64: the
+//!   square-root instruction (`math::sqrt`, correctly rounded like libm's routine used
+//!   elsewhere) and, with the optional `fma` feature, the fused multiply-add
+//!   (`math::mul_add`).
 //! - No panics on any input: a malformed blob is a [`BlobError`]; a NaN, infinite, zero or
 //!   non-unit direction, `u` outside [0, 1], or zero steps give `None` / a PDF of 0.
 //! - Exact: the PDF reported with a sample is the density of the discrete map that ran
@@ -29,8 +31,8 @@
 //! Frames: local shading frame, `z` the normal; `wi` points away from the surface.
 
 #![no_std]
-#![cfg_attr(not(feature = "fma"), forbid(unsafe_code))]
-#![cfg_attr(feature = "fma", deny(unsafe_code))]
+// `unsafe` is denied everywhere but the two intrinsic calls of `math` (see the contract).
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 // `!(x > 0.0)` is how this crate rejects NaN together with the out-of-range values; the
 // "clearer" `x <= 0.0` would let NaN through.
