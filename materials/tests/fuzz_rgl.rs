@@ -21,6 +21,7 @@
 
 #[path = "../../tests/support/fuzz_driver.rs"]
 mod fuzz_driver;
+mod tensor_copy;
 
 use diffbsdf_materials::rgl::{RglError, RglMaterial, TensorFile};
 use diffbsdf_materials::{DVec3, Material};
@@ -28,6 +29,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
+use tensor_copy::{rewrite, spread, Rewrite};
 
 const DEFAULT_INPUTS: usize = 400_000;
 const DEFAULT_SEED: u64 = 0x0B5D_F00D;
@@ -150,151 +152,37 @@ fn layout(bytes: &[u8]) -> Vec<Entry> {
     out
 }
 
-/// One field to write: name, dtype code, shape, little-endian data.
-struct Out {
-    name: String,
-    dtype: u8,
-    shape: Vec<usize>,
-    data: Vec<u8>,
-}
-
-/// Writes a version 1.0 `tensor_file` with 8-byte aligned data after the header.
-fn write_tensor_file(fields: &[Out]) -> Vec<u8> {
-    let header_len: usize = 18
-        + fields
-            .iter()
-            .map(|f| 2 + f.name.len() + 2 + 1 + 8 + 8 * f.shape.len())
-            .sum::<usize>();
-    let mut offsets = Vec::new();
-    let mut at = header_len.next_multiple_of(8);
-    for f in fields {
-        offsets.push(at);
-        at = (at + f.data.len()).next_multiple_of(8);
-    }
-    let mut b = Vec::with_capacity(at);
-    b.extend_from_slice(b"tensor_file\0");
-    b.extend_from_slice(&[1, 0]);
-    b.extend_from_slice(&(fields.len() as u32).to_le_bytes());
-    for (f, off) in fields.iter().zip(&offsets) {
-        b.extend_from_slice(&(f.name.len() as u16).to_le_bytes());
-        b.extend_from_slice(f.name.as_bytes());
-        b.extend_from_slice(&(f.shape.len() as u16).to_le_bytes());
-        b.push(f.dtype);
-        b.extend_from_slice(&(*off as u64).to_le_bytes());
-        for &s in &f.shape {
-            b.extend_from_slice(&(s as u64).to_le_bytes());
-        }
-    }
-    for (f, off) in fields.iter().zip(&offsets) {
-        b.resize(*off, 0);
-        b.extend_from_slice(&f.data);
-    }
-    b.resize(at, 0);
-    b
-}
-
-/// The elements of an n-d array (row-major, `elem` bytes each) at the index lists `keep`
-/// (one per axis).
-fn gather(data: &[u8], shape: &[usize], keep: &[Vec<usize>], elem: usize) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut idx = vec![0usize; shape.len()];
-    loop {
-        let mut flat = 0;
-        for (d, &i) in idx.iter().enumerate() {
-            flat = flat * shape[d] + keep[d][i];
-        }
-        out.extend_from_slice(&data[flat * elem..(flat + 1) * elem]);
-        let mut d = shape.len();
-        loop {
-            if d == 0 {
-                return out;
-            }
-            d -= 1;
-            idx[d] += 1;
-            if idx[d] < keep[d].len() {
-                break;
-            }
-            idx[d] = 0;
-        }
-    }
-}
-
-/// `m` evenly spread indices of `0..n`, first and last included.
-fn spread(n: usize, m: usize) -> Vec<usize> {
-    if n <= m {
-        return (0..n).collect();
-    }
-    (0..m).map(|k| k * (n - 1) / (m - 1)).collect()
-}
-
 /// A small valid file from a real one: 4 of the incidences, VNDF 16x16, luminance and RGB
 /// 8x8; the other fields as they are.
 fn small_copy(bytes: &[u8]) -> Vec<u8> {
     let tf = TensorFile::parse(bytes).unwrap();
     let thetas = spread(tf.field("theta_i").unwrap().shape[0], 4);
-    let fields = tf
-        .fields
-        .iter()
-        .map(|f| {
-            let elem = f.bytes.len() / f.len().max(1);
-            let all = |n: usize| (0..n).collect::<Vec<_>>();
-            let keep: Option<Vec<Vec<usize>>> = match f.name.as_str() {
-                "theta_i" => Some(vec![thetas.clone()]),
-                "vndf" => Some(vec![
-                    all(f.shape[0]),
-                    thetas.clone(),
-                    spread(f.shape[2], 16),
-                    spread(f.shape[3], 16),
-                ]),
-                "luminance" => Some(vec![
-                    all(f.shape[0]),
-                    thetas.clone(),
-                    spread(f.shape[2], 8),
-                    spread(f.shape[3], 8),
-                ]),
-                "rgb" => Some(vec![
-                    all(f.shape[0]),
-                    thetas.clone(),
-                    all(f.shape[2]),
-                    spread(f.shape[3], 8),
-                    spread(f.shape[4], 8),
-                ]),
-                _ => None,
-            };
-            match keep {
-                Some(keep) => Out {
-                    name: f.name.clone(),
-                    dtype: 10,
-                    shape: keep.iter().map(Vec::len).collect(),
-                    data: gather(f.bytes, &f.shape, &keep, elem),
-                },
-                None => Out {
-                    name: f.name.clone(),
-                    dtype: code_of(f),
-                    shape: f.shape.clone(),
-                    data: f.bytes.to_vec(),
-                },
-            }
-        })
-        .collect::<Vec<_>>();
-    write_tensor_file(&fields)
-}
-
-fn code_of(f: &diffbsdf_materials::rgl::tensor::Field<'_>) -> u8 {
-    use diffbsdf_materials::rgl::tensor::Dtype::*;
-    match f.dtype {
-        U8 => 1,
-        I8 => 2,
-        U16 => 3,
-        I16 => 4,
-        U32 => 5,
-        I32 => 6,
-        U64 => 7,
-        I64 => 8,
-        F16 => 9,
-        F32 => 10,
-        F64 => 11,
-    }
+    rewrite(bytes, |f| {
+        let all = |n: usize| (0..n).collect::<Vec<_>>();
+        match f.name.as_str() {
+            "theta_i" => Rewrite::Gather(vec![thetas.clone()]),
+            "vndf" => Rewrite::Gather(vec![
+                all(f.shape[0]),
+                thetas.clone(),
+                spread(f.shape[2], 16),
+                spread(f.shape[3], 16),
+            ]),
+            "luminance" => Rewrite::Gather(vec![
+                all(f.shape[0]),
+                thetas.clone(),
+                spread(f.shape[2], 8),
+                spread(f.shape[3], 8),
+            ]),
+            "rgb" => Rewrite::Gather(vec![
+                all(f.shape[0]),
+                thetas.clone(),
+                all(f.shape[2]),
+                spread(f.shape[3], 8),
+                spread(f.shape[4], 8),
+            ]),
+            _ => Rewrite::Keep,
+        }
+    })
 }
 
 /// The small copies (every file) and the full-size files.

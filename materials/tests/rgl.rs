@@ -1,13 +1,18 @@
 //! RGL measured files: all six real files load; truncated and corrupted copies are
 //! rejected with an error (never a panic); the tabular sampler passes the chi-square test
-//! against its own PDF and its PDF integrates to the sampled-mass fraction.
+//! against its own PDF and its PDF integrates to the sampled-mass fraction, on the six
+//! files and on an anisotropic copy of one (the reader's path for files measured at more
+//! than two incident azimuths, which none of the six is).
 
 mod common;
+mod tensor_copy;
 
 use common::{chi2, dir_deg, rng, Domain, ALPHA};
 use diffbsdf_materials::rgl::{RglError, RglMaterial};
 use diffbsdf_materials::{DVec3, Material};
 use rand::Rng;
+use std::f64::consts::PI;
+use tensor_copy::{rewrite, Out, Rewrite};
 
 /// The measured files: `shared/data/rgl/` beside the repository.
 fn data_dir() -> String {
@@ -113,52 +118,145 @@ fn rejects_truncated_and_corrupted_copies() {
     ));
 }
 
+/// A copy of the file `bytes` measured at `p` incident azimuths evenly spread over [-pi,
+/// pi], each with the file's one set of tables: more than two azimuths make it anisotropic
+/// (RGL-FORMAT.md), so its half-vector azimuths are read as they are, not relative to
+/// `phi_i`; at `phi_i = 0` the two readings agree.
+fn anisotropic_copy(bytes: &[u8], p: usize) -> Vec<u8> {
+    rewrite(bytes, |f| match f.name.as_str() {
+        "phi_i" => Rewrite::Replace(Out {
+            name: f.name.clone(),
+            dtype: 10,
+            shape: vec![p],
+            data: (0..p)
+                .map(|k| ((2.0 * k as f64 / (p - 1) as f64 - 1.0) * PI) as f32)
+                .flat_map(f32::to_le_bytes)
+                .collect(),
+        }),
+        "vndf" | "luminance" | "rgb" => Rewrite::Gather(
+            std::iter::once(vec![0; p])
+                .chain(f.shape.iter().skip(1).map(|&n| (0..n).collect()))
+                .collect(),
+        ),
+        _ => Rewrite::Keep,
+    })
+}
+
+#[test]
+fn anisotropic_copy_reads_absolute_azimuths() {
+    let bytes = std::fs::read(path("vch_golden_yellow_rgb.bsdf")).unwrap();
+    let iso = RglMaterial::from_bytes(&bytes).unwrap();
+    let aniso = RglMaterial::from_bytes(&anisotropic_copy(&bytes, 5)).unwrap();
+    assert!(iso.is_isotropic() && !aniso.is_isotropic());
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
+    let (mut same, mut rotated) = (0, 0);
+    for theta_i in [20.0, 45.0, 70.0, 85.0] {
+        for (theta_o, phi_o) in [
+            (10.0, 3.0),
+            (30.0, PI),
+            (50.0, 2.0),
+            (60.0, 0.5),
+            (75.0, 4.0),
+        ] {
+            let wo = dir_deg(theta_o, phi_o);
+            // At phi_i = 0 the tables are read at the same azimuths.
+            let wi = dir_deg(theta_i, 0.0);
+            let (a, b) = (iso.eval_cos(wi, wo), aniso.eval_cos(wi, wo));
+            assert!(
+                close(a.max_channel(), b.max_channel()),
+                "{theta_i} {theta_o}: {a:?} {b:?}"
+            );
+            assert!(
+                close(iso.pdf(wi, wo), aniso.pdf(wi, wo)),
+                "{theta_i} {theta_o}"
+            );
+            same += 1;
+            // Turning `wi` and `wo` together about the normal keeps the isotropic file's
+            // value and moves the copy's (its lobe stays at its absolute azimuths).
+            let turn = |w: DVec3| DVec3::new(-w.y, w.x, w.z);
+            let (wi_t, wo_t) = (turn(wi), turn(wo));
+            let iso_t = iso.eval_cos(wi_t, wo_t).max_channel();
+            assert!(
+                (iso_t - a.max_channel()).abs() <= 1e-9 * iso_t.max(1e-12),
+                "{theta_i}"
+            );
+            let aniso_t = aniso.eval_cos(wi_t, wo_t).max_channel();
+            rotated += usize::from((aniso_t - a.max_channel()).abs() > 1e-3 * aniso_t.max(1e-12));
+        }
+    }
+    assert_eq!(same, 20);
+    assert!(
+        rotated >= 8,
+        "only {rotated} of 20 turned pairs differ on the anisotropic copy"
+    );
+}
+
 #[test]
 fn sampler_chi2_and_normalisation() {
-    const N: usize = 100_000;
     let angles = [10.0, 50.0, 80.0];
-    let tests = FILES.len() * angles.len();
-    let threshold = ALPHA / tests as f64;
+    let mut materials: Vec<(String, RglMaterial, f64)> = FILES
+        .iter()
+        .map(|f| (f.to_string(), RglMaterial::open(&path(f)).unwrap(), 0.4))
+        .collect();
+    // The anisotropic path, between two of the copy's azimuths and away from phi_i = 0.
+    let bytes = std::fs::read(path("vch_golden_yellow_rgb.bsdf")).unwrap();
+    let aniso = RglMaterial::from_bytes(&anisotropic_copy(&bytes, 5)).unwrap();
+    materials.push(("anisotropic copy".to_string(), aniso, 2.2));
+    let threshold = ALPHA / (materials.len() * angles.len()) as f64;
     let mut failures = Vec::new();
-    for (k, f) in FILES.iter().enumerate() {
-        let m = RglMaterial::open(&path(f)).unwrap();
+    for (k, (f, m, phi_i)) in materials.iter().enumerate() {
         for (j, deg) in angles.iter().enumerate() {
-            let wi = dir_deg(*deg, 0.4);
-            let mut r = rng(50 + 10 * k as u64 + j as u64);
-            let mut samples = Vec::new();
-            for _ in 0..N {
-                let u = [r.gen::<f64>(), r.gen::<f64>(), r.gen::<f64>()];
-                if let Some(s) = m.sample(wi, u) {
-                    let p = m.pdf(wi, s.wo);
-                    assert!((p - s.pdf).abs() <= 1e-6 * s.pdf, "{f}");
-                    assert!(s.weight.is_finite());
-                    samples.push(s.wo);
-                }
-            }
-            let frac = samples.len() as f64 / N as f64;
-            let dom = Domain::new(DVec3::new(-wi.x, -wi.y, wi.z));
-            let pdf = |w: DVec3| m.pdf(wi, w);
-            let integral = dom.integrate(&pdf);
-            let total: f64 = integral.iter().sum();
-            let mut observed = vec![0.0; integral.len() + 1];
-            for w in &samples {
-                observed[dom.bin(*w)] += 1.0;
-            }
-            observed[integral.len()] = (N - samples.len()) as f64;
-            let mut expected: Vec<f64> = integral.iter().map(|p| p * N as f64).collect();
-            expected.push((1.0 - total).max(0.0) * N as f64);
-            let c = chi2(&observed, &expected);
-            let sigma = (frac * (1.0 - frac) / N as f64).sqrt();
-            println!(
-                "{f:<28} theta_i={deg:4.1} int={total:.5} frac={frac:.5} chi2={:8.1} dof={:4} p={:.4}",
-                c.stat, c.dof, c.p
-            );
-            if c.p < threshold || (total - frac).abs() > 5.0 * sigma + 2e-3 {
-                failures.push(format!("{f} {deg}: p={:.3e} int={total} frac={frac}", c.p));
+            let wi = dir_deg(*deg, *phi_i);
+            print!("{f:<28} theta_i={deg:4.1} ");
+            if let Err(e) = check_sampler(m, wi, 50 + 10 * k as u64 + j as u64, threshold) {
+                failures.push(format!("{f} {deg}: {e}"));
             }
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The chi-square test of `m`'s sampler at `wi` against its own PDF (100 000 draws), and
+/// the PDF's integral against the sampled-mass fraction.
+fn check_sampler(m: &RglMaterial, wi: DVec3, seed: u64, threshold: f64) -> Result<(), String> {
+    const N: usize = 100_000;
+    let mut r = rng(seed);
+    let mut samples = Vec::new();
+    for _ in 0..N {
+        let u = [r.gen::<f64>(), r.gen::<f64>(), r.gen::<f64>()];
+        if let Some(s) = m.sample(wi, u) {
+            let p = m.pdf(wi, s.wo);
+            assert!(
+                (p - s.pdf).abs() <= 1e-6 * s.pdf,
+                "pdf {p} vs sampled {}",
+                s.pdf
+            );
+            assert!(s.weight.is_finite());
+            samples.push(s.wo);
+        }
+    }
+    let frac = samples.len() as f64 / N as f64;
+    let dom = Domain::new(DVec3::new(-wi.x, -wi.y, wi.z));
+    let pdf = |w: DVec3| m.pdf(wi, w);
+    let integral = dom.integrate(&pdf);
+    let total: f64 = integral.iter().sum();
+    let mut observed = vec![0.0; integral.len() + 1];
+    for w in &samples {
+        observed[dom.bin(*w)] += 1.0;
+    }
+    observed[integral.len()] = (N - samples.len()) as f64;
+    let mut expected: Vec<f64> = integral.iter().map(|p| p * N as f64).collect();
+    expected.push((1.0 - total).max(0.0) * N as f64);
+    let c = chi2(&observed, &expected);
+    let sigma = (frac * (1.0 - frac) / N as f64).sqrt();
+    println!(
+        "int={total:.5} frac={frac:.5} chi2={:8.1} dof={:4} p={:.4}",
+        c.stat, c.dof, c.p
+    );
+    if c.p < threshold || (total - frac).abs() > 5.0 * sigma + 2e-3 {
+        return Err(format!("p={:.3e} int={total} frac={frac}", c.p));
+    }
+    Ok(())
 }
 
 /// Energy: `int f |cos| dwo <= 1` by quadrature for every file.
