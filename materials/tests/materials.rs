@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{chi2, dir_deg, rng, Domain, ALPHA};
+use common::{chi2_of_samples, dir_deg, rng, Domain, ALPHA};
 use diffbsdf_materials::{from_spherical, parse_spec, DVec3, Material, Spherical};
 use rand::Rng;
 
@@ -146,14 +146,7 @@ fn chi2_normalisation_and_pdf_consistency() {
             let total: f64 = integral.iter().sum();
             let sigma = (frac * (1.0 - frac) / SAMPLES as f64).sqrt();
             let norm_ok = (total - frac).abs() <= 5.0 * sigma + 2e-3;
-            let mut observed = vec![0.0; integral.len() + 1];
-            for w in &samples {
-                observed[dom.bin(*w)] += 1.0;
-            }
-            observed[integral.len()] = (SAMPLES - samples.len()) as f64;
-            let mut expected: Vec<f64> = integral.iter().map(|p| p * SAMPLES as f64).collect();
-            expected.push((1.0 - total).max(0.0) * SAMPLES as f64);
-            let c = chi2(&observed, &expected);
+            let c = chi2_of_samples(&dom, &samples, SAMPLES, &integral);
             report.push_str(&format!(
                 "{spec:<72} theta_i={:6.1} int={total:.5} frac={frac:.5} chi2={:9.1} dof={:4} p={:.4}\n",
                 wi.theta().to_degrees(),

@@ -7,7 +7,7 @@
 mod common;
 mod tensor_copy;
 
-use common::{chi2, dir_deg, rng, Domain, ALPHA};
+use common::{chi2_of_samples, dir_deg, rng, Domain, ALPHA};
 use diffbsdf_materials::rgl::{RglError, RglMaterial};
 use diffbsdf_materials::{DVec3, Material};
 use rand::Rng;
@@ -240,14 +240,7 @@ fn check_sampler(m: &RglMaterial, wi: DVec3, seed: u64, threshold: f64) -> Resul
     let pdf = |w: DVec3| m.pdf(wi, w);
     let integral = dom.integrate(&pdf);
     let total: f64 = integral.iter().sum();
-    let mut observed = vec![0.0; integral.len() + 1];
-    for w in &samples {
-        observed[dom.bin(*w)] += 1.0;
-    }
-    observed[integral.len()] = (N - samples.len()) as f64;
-    let mut expected: Vec<f64> = integral.iter().map(|p| p * N as f64).collect();
-    expected.push((1.0 - total).max(0.0) * N as f64);
-    let c = chi2(&observed, &expected);
+    let c = chi2_of_samples(&dom, &samples, N, &integral);
     let sigma = (frac * (1.0 - frac) / N as f64).sqrt();
     println!(
         "int={total:.5} frac={frac:.5} chi2={:8.1} dof={:4} p={:.4}",

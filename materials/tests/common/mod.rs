@@ -222,6 +222,21 @@ pub struct Chi2 {
     pub p: f64,
 }
 
+/// Pearson's test of the directions `samples`, `n` draws of which the rest were lost,
+/// against `n` times the integrals `integral` of the density over `dom`'s bins; the lost
+/// draws are one more bin, expected `n (1 - sum integral)`.
+pub fn chi2_of_samples(dom: &Domain, samples: &[DVec3], n: usize, integral: &[f64]) -> Chi2 {
+    let total: f64 = integral.iter().sum();
+    let mut observed = vec![0.0; integral.len() + 1];
+    for w in samples {
+        observed[dom.bin(*w)] += 1.0;
+    }
+    observed[integral.len()] = (n - samples.len()) as f64;
+    let mut expected: Vec<f64> = integral.iter().map(|p| p * n as f64).collect();
+    expected.push((1.0 - total).max(0.0) * n as f64);
+    chi2(&observed, &expected)
+}
+
 /// Pearson's test of observed against expected counts, pooling bins with expected < 5
 /// into one bin (bins whose quadrature is zero, e.g. slivers at the horizon, go there too).
 pub fn chi2(observed: &[f64], expected: &[f64]) -> Chi2 {
