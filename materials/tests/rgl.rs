@@ -149,7 +149,7 @@ fn anisotropic_copy_reads_absolute_azimuths() {
     let aniso = RglMaterial::from_bytes(&anisotropic_copy(&bytes, 5)).unwrap();
     assert!(iso.is_isotropic() && !aniso.is_isotropic());
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
-    let (mut same, mut rotated) = (0, 0);
+    let mut rotated = 0;
     for theta_i in [20.0, 45.0, 70.0, 85.0] {
         for (theta_o, phi_o) in [
             (10.0, 3.0),
@@ -170,7 +170,6 @@ fn anisotropic_copy_reads_absolute_azimuths() {
                 close(iso.pdf(wi, wo), aniso.pdf(wi, wo)),
                 "{theta_i} {theta_o}"
             );
-            same += 1;
             // Turning `wi` and `wo` together about the normal keeps the isotropic file's
             // value and moves the copy's (its lobe stays at its absolute azimuths).
             let turn = |w: DVec3| DVec3::new(-w.y, w.x, w.z);
@@ -184,7 +183,6 @@ fn anisotropic_copy_reads_absolute_azimuths() {
             rotated += usize::from((aniso_t - a.max_channel()).abs() > 1e-3 * aniso_t.max(1e-12));
         }
     }
-    assert_eq!(same, 20);
     assert!(
         rotated >= 8,
         "only {rotated} of 20 turned pairs differ on the anisotropic copy"
