@@ -1,14 +1,16 @@
 //! RGL measured files: all six real files load; truncated and corrupted copies are
 //! rejected with an error (never a panic); the tabular sampler passes the chi-square test
 //! against its own PDF and its PDF integrates to the sampled-mass fraction, on the six
-//! files and on an anisotropic copy of one (the reader's path for files measured at more
-//! than two incident azimuths, which none of the six is).
+//! files and on anisotropic copies of one (the reader's path for files measured at more
+//! than two incident azimuths, which none of the six is: over the whole turn, half of it
+//! and a quarter, the last two folded); a spectral copy (`spectra` over `wavelengths`, the
+//! database's `_spec` files) has the RGB file's luminance.
 
 mod common;
 mod tensor_copy;
 
 use common::{chi2_of_samples, dir_deg, rng, Domain, ALPHA};
-use diffbsdf_materials::rgl::{RglError, RglMaterial};
+use diffbsdf_materials::rgl::{AzimuthFold, RglError, RglMaterial};
 use diffbsdf_materials::{DVec3, Material};
 use rand::Rng;
 use std::f64::consts::PI;
@@ -123,13 +125,19 @@ fn rejects_truncated_and_corrupted_copies() {
 /// (RGL-FORMAT.md), so its half-vector azimuths are read as they are, not relative to
 /// `phi_i`; at `phi_i = 0` the two readings agree.
 fn anisotropic_copy(bytes: &[u8], p: usize) -> Vec<u8> {
+    azimuth_copy(bytes, p, -PI, PI)
+}
+
+/// [`anisotropic_copy`] with its `p` azimuths over `[from, to]` only: over half the turn
+/// or a quarter of it, a reader folds every direction into that range.
+fn azimuth_copy(bytes: &[u8], p: usize, from: f64, to: f64) -> Vec<u8> {
     rewrite(bytes, |f| match f.name.as_str() {
         "phi_i" => Rewrite::Replace(Out {
             name: f.name.clone(),
             dtype: 10,
             shape: vec![p],
             data: (0..p)
-                .map(|k| ((2.0 * k as f64 / (p - 1) as f64 - 1.0) * PI) as f32)
+                .map(|k| (from + (to - from) * k as f64 / (p - 1) as f64) as f32)
                 .flat_map(f32::to_le_bytes)
                 .collect(),
         }),
@@ -189,6 +197,156 @@ fn anisotropic_copy_reads_absolute_azimuths() {
     );
 }
 
+/// Pairs of directions the folding tests evaluate: `wi` at `phi_i` with `theta_i` in
+/// 20-85 deg, `wo` spread over the hemisphere.
+fn pairs(phi_i: f64) -> Vec<(DVec3, DVec3)> {
+    let mut out = Vec::new();
+    for theta_i in [20.0, 45.0, 70.0, 85.0] {
+        for (theta_o, phi_o) in [
+            (10.0, 3.0),
+            (30.0, PI),
+            (50.0, 2.0),
+            (60.0, 0.5),
+            (75.0, 4.0),
+        ] {
+            out.push((dir_deg(theta_i, phi_i), dir_deg(theta_o, phi_o)));
+        }
+    }
+    out
+}
+
+#[test]
+fn copies_over_half_or_a_quarter_turn_fold_azimuths() {
+    let bytes = std::fs::read(path("vch_golden_yellow_rgb.bsdf")).unwrap();
+    let full = RglMaterial::from_bytes(&anisotropic_copy(&bytes, 5)).unwrap();
+    let half = RglMaterial::from_bytes(&azimuth_copy(&bytes, 4, -PI, 0.0)).unwrap();
+    let quarter = RglMaterial::from_bytes(&azimuth_copy(&bytes, 3, -PI, -PI / 2.0)).unwrap();
+    assert_eq!(full.azimuth_fold(), AzimuthFold::None);
+    assert_eq!(half.azimuth_fold(), AzimuthFold::HalfTurn);
+    assert_eq!(quarter.azimuth_fold(), AzimuthFold::Quarter);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
+    // Inside its stored range a folded copy reads the tables as the whole-turn copy does.
+    for (m, phi_i) in [(&half, -1.0), (&quarter, -2.0)] {
+        for (wi, wo) in pairs(phi_i) {
+            let (a, b) = (full.eval_cos(wi, wo), m.eval_cos(wi, wo));
+            assert!(
+                close(a.max_channel(), b.max_channel()),
+                "{phi_i}: {a:?} {b:?}"
+            );
+            assert!(close(full.pdf(wi, wo), m.pdf(wi, wo)), "{phi_i}");
+        }
+    }
+    // Outside it, the material is its symmetric image: a half turn about the normal for
+    // the half-turn copy, a mirror about either axis for the quarter one (`wi` in the
+    // first quadrant, where an unfolded reading would clamp to the stored azimuths).
+    let turn = |w: DVec3| DVec3::new(-w.x, -w.y, w.z);
+    let mirror_x = |w: DVec3| DVec3::new(-w.x, w.y, w.z);
+    let mirror_y = |w: DVec3| DVec3::new(w.x, -w.y, w.z);
+    let images: [(&RglMaterial, &dyn Fn(DVec3) -> DVec3); 3] =
+        [(&half, &turn), (&quarter, &mirror_x), (&quarter, &mirror_y)];
+    let mut moved = 0;
+    for (m, image) in images {
+        for (wi, wo) in pairs(0.8) {
+            let a = m.eval_cos(wi, wo).max_channel();
+            let b = m.eval_cos(image(wi), image(wo)).max_channel();
+            assert!(close(a, b), "{wi:?} {wo:?}: {a} {b}");
+            assert!(close(m.pdf(wi, wo), m.pdf(image(wi), image(wo))));
+            // ... and not the whole-turn copy, whose lobe stays at absolute azimuths.
+            let c = full.eval_cos(wi, wo).max_channel();
+            moved += usize::from((a - c).abs() > 1e-3 * a.max(c).max(1e-12));
+        }
+    }
+    assert!(
+        moved >= 20,
+        "only {moved} of 60 folded pairs differ from the whole turn"
+    );
+    // A span that is neither a whole, half nor quarter turn is refused.
+    assert_eq!(
+        RglMaterial::from_bytes(&azimuth_copy(&bytes, 3, -PI, -PI + 1.0)).unwrap_err(),
+        RglError::BadAngles("phi_i")
+    );
+}
+
+/// A spectral copy of the file `bytes`: its `rgb` table replaced by `wavelengths` (nm, an
+/// uneven grid over 360-830) and `spectra`, each node's spectrum constant at the
+/// luminance of its RGB.
+fn grey_spectral_copy(bytes: &[u8]) -> Vec<u8> {
+    let wavelengths: Vec<f32> = (0..=40).map(|k| 360.0 + 0.29375 * (k * k) as f32).collect();
+    rewrite(bytes, |f| match f.name.as_str() {
+        "rgb" => {
+            let rgb = f.f32_values("rgb").unwrap();
+            let (nodes, w) = (f.shape[3] * f.shape[4], wavelengths.len());
+            let mut spectra = Vec::with_capacity(rgb.len() / 3 * w);
+            for slice in rgb.chunks(3 * nodes) {
+                for _ in 0..w {
+                    spectra.extend((0..nodes).map(|i| {
+                        let y = 0.2126 * slice[i] + 0.7152 * slice[nodes + i];
+                        (y + 0.0722 * slice[2 * nodes + i]) as f32
+                    }));
+                }
+            }
+            let mut shape = f.shape.clone();
+            shape[2] = w;
+            Rewrite::ReplaceMany(vec![
+                Out {
+                    name: "wavelengths".into(),
+                    dtype: 10,
+                    shape: vec![w],
+                    data: wavelengths.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                },
+                Out {
+                    name: "spectra".into(),
+                    dtype: 10,
+                    shape,
+                    data: spectra.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                },
+            ])
+        }
+        _ => Rewrite::Keep,
+    })
+}
+
+#[test]
+fn spectral_copy_has_the_luminance_of_the_rgb_file() {
+    let bytes = std::fs::read(path("vch_golden_yellow_rgb.bsdf")).unwrap();
+    let rgb = RglMaterial::from_bytes(&bytes).unwrap();
+    let spec = RglMaterial::from_bytes(&grey_spectral_copy(&bytes)).unwrap();
+    let mut compared = 0;
+    for (wi, wo) in pairs(0.0).into_iter().chain(pairs(2.0)) {
+        // The tabular sampler reads the same luminance and VNDF tables.
+        assert_eq!(rgb.pdf(wi, wo), spec.pdf(wi, wo));
+        let (a, b) = (rgb.eval_cos(wi, wo), spec.eval_cos(wi, wo));
+        assert!(b.is_finite() && b.0.iter().all(|&c| c >= 0.0), "{b:?}");
+        // Where no channel of the RGB file is clamped at zero, the grey spectra have its
+        // luminance (to the colour matrix's rounding of its luminance weights).
+        if a.0.iter().all(|&c| c > 0.0) {
+            let (ya, yb) = (a.luminance(), b.luminance());
+            assert!((ya - yb).abs() <= 1e-4 * ya, "{wi:?} {wo:?}: {ya} {yb}");
+            compared += 1;
+        }
+    }
+    assert!(
+        compared >= 30,
+        "only {compared} of 40 pairs have positive channels"
+    );
+    // A spectral file whose wavelengths see no visible light is refused.
+    let infrared = rewrite(&grey_spectral_copy(&bytes), |f| match f.name.as_str() {
+        "wavelengths" => Rewrite::Replace(Out {
+            name: f.name.clone(),
+            dtype: 10,
+            shape: f.shape.clone(),
+            data: (0..f.shape[0])
+                .flat_map(|k| (1000.0 + k as f32).to_le_bytes())
+                .collect(),
+        }),
+        _ => Rewrite::Keep,
+    });
+    assert_eq!(
+        RglMaterial::from_bytes(&infrared).unwrap_err(),
+        RglError::BadWavelengths
+    );
+}
+
 #[test]
 fn sampler_chi2_and_normalisation() {
     let angles = [10.0, 50.0, 80.0];
@@ -200,6 +358,11 @@ fn sampler_chi2_and_normalisation() {
     let bytes = std::fs::read(path("vch_golden_yellow_rgb.bsdf")).unwrap();
     let aniso = RglMaterial::from_bytes(&anisotropic_copy(&bytes, 5)).unwrap();
     materials.push(("anisotropic copy".to_string(), aniso, 2.2));
+    // Folded: in the first quadrant, outside the stored azimuths of either copy.
+    let half = RglMaterial::from_bytes(&azimuth_copy(&bytes, 4, -PI, 0.0)).unwrap();
+    materials.push(("half-turn copy".to_string(), half, 1.0));
+    let quarter = RglMaterial::from_bytes(&azimuth_copy(&bytes, 3, -PI, -PI / 2.0)).unwrap();
+    materials.push(("quarter-turn copy".to_string(), quarter, 0.8));
     let threshold = ALPHA / (materials.len() * angles.len()) as f64;
     let mut failures = Vec::new();
     for (k, (f, m, phi_i)) in materials.iter().enumerate() {

@@ -35,8 +35,11 @@ pub enum RglError {
     NonFinite(&'static str),
     /// A table that must be sampled has no positive mass in some slice.
     NotNormalizable(&'static str),
-    /// Incidence angles are not increasing, or out of range.
+    /// Incidence angles are not increasing, or out of range; or the incident azimuths of
+    /// an anisotropic file span neither the whole turn nor a half or a quarter of it.
     BadAngles(&'static str),
+    /// The `wavelengths` of a spectral file are not increasing, or miss visible light.
+    BadWavelengths,
 }
 
 impl fmt::Display for RglError {
@@ -57,6 +60,10 @@ impl fmt::Display for RglError {
             RglError::NonFinite(n) => write!(f, "field `{n}` contains NaN or infinity"),
             RglError::NotNormalizable(n) => write!(f, "table `{n}` has a slice with no mass"),
             RglError::BadAngles(n) => write!(f, "field `{n}` is not increasing within range"),
+            RglError::BadWavelengths => write!(
+                f,
+                "field `wavelengths` is not increasing or misses the visible range"
+            ),
         }
     }
 }

@@ -2,11 +2,19 @@
 //! Material Acquisition and Rendering"): the `.bsdf` `tensor_file` reader, evaluation, and
 //! the tabular sampler (luminance table, then the VNDF warp) with its PDF.
 //!
+//! Both kinds of file the database ships are read: `_rgb` files directly, `_spec` files
+//! (a `spectra` table over `wavelengths`) as the RGB of their spectra ([`spectral`]). An
+//! anisotropic file may store its incident azimuths over half or a quarter of the turn
+//! (a material symmetric under a half turn, or mirrored about both axes): directions are
+//! folded into the stored range before the tables are read, and sampled directions
+//! unfolded, as Mitsuba's `measured` plugin does.
+//!
 //! Contract: reading never panics; every malformed input is an [`RglError`]. See
 //! `shared/RGL-FORMAT.md` for the format facts this follows.
 
 pub mod cursor;
 pub mod error;
+pub mod spectral;
 pub mod tensor;
 pub mod warp2d;
 
@@ -42,13 +50,61 @@ fn u_to_phi(u: f64) -> f64 {
     (2.0 * u - 1.0) * PI
 }
 
-/// A measured isotropic or anisotropic RGB BSDF.
+/// Which part of the turn an anisotropic file's incident azimuths cover, and so how
+/// directions are folded into it (Mitsuba's `measured` plugin: the span's share of
+/// `2 pi`, rounded).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AzimuthFold {
+    /// The whole turn (and every isotropic file): no folding.
+    None,
+    /// Half the turn, `[-pi, 0]`: a `wi` with `y > 0` is turned by `pi` about the normal.
+    HalfTurn,
+    /// A quarter, `[-pi, -pi/2]`: `x` and `y` are each mirrored to be negative.
+    Quarter,
+}
+
+impl AzimuthFold {
+    /// From the stored incident azimuths; an error for a span that is not a whole, half
+    /// or quarter turn.
+    fn of(phi_i: &[f64], isotropic: bool) -> Result<Self, RglError> {
+        if isotropic {
+            return Ok(AzimuthFold::None);
+        }
+        let span = phi_i[phi_i.len() - 1] - phi_i[0];
+        // Saturating cast: a NaN or huge share is none of the three.
+        match (2.0 * PI / span).round() as i64 {
+            1 => Ok(AzimuthFold::None),
+            2 => Ok(AzimuthFold::HalfTurn),
+            4 => Ok(AzimuthFold::Quarter),
+            _ => Err(RglError::BadAngles("phi_i")),
+        }
+    }
+
+    /// The signs `(sx, sy)` that fold `wi` into the stored range; the same signs fold a
+    /// `wo` with it and unfold a sampled one (each is its own inverse).
+    fn signs(self, wi: DVec3) -> (f64, f64) {
+        let negate = |v: f64| if v >= 0.0 { -1.0 } else { 1.0 };
+        match self {
+            AzimuthFold::None => (1.0, 1.0),
+            AzimuthFold::HalfTurn => (negate(wi.y), negate(wi.y)),
+            AzimuthFold::Quarter => (negate(wi.x), negate(wi.y)),
+        }
+    }
+}
+
+/// `w` with its `x` and `y` multiplied by the signs of [`AzimuthFold::signs`].
+fn apply_signs(w: DVec3, (sx, sy): (f64, f64)) -> DVec3 {
+    DVec3::new(w.x * sx, w.y * sy, w.z)
+}
+
+/// A measured isotropic or anisotropic BSDF, RGB or spectral (read as RGB).
 #[derive(Debug, Clone)]
 pub struct RglMaterial {
     path: String,
     /// The `description` text of the file.
     pub description: String,
     isotropic: bool,
+    fold: AzimuthFold,
     jacobian: bool,
     ndf: Warp2D,
     sigma: Warp2D,
@@ -109,6 +165,7 @@ impl RglMaterial {
             return Err(RglError::BadAngles("theta_i"));
         }
         let isotropic = np <= 2;
+        let fold = AzimuthFold::of(&phi_i, isotropic)?;
         let jacobian = match tf.field("jacobian") {
             Ok(f) => f.bytes.first().copied().unwrap_or(0) != 0,
             Err(_) => false,
@@ -150,13 +207,12 @@ impl RglMaterial {
             params.clone(),
             true,
         )?;
-        let rf = tf.field("rgb")?;
-        check_shape(rf, "rgb", &[Some(np), Some(nt), Some(3), None, None])?;
+        let (rgb_values, nx, ny) = Self::rgb_table(&tf, np, nt)?;
         let rgb = Warp2D::new(
             "rgb",
-            rf.f32_values("rgb")?,
-            rf.shape[4],
-            rf.shape[3],
+            rgb_values,
+            nx,
+            ny,
             vec![phi_i, theta_i, vec![0.0, 1.0, 2.0]],
             false,
         )?;
@@ -164,6 +220,7 @@ impl RglMaterial {
             path: String::new(),
             description,
             isotropic,
+            fold,
             jacobian,
             ndf,
             sigma,
@@ -173,12 +230,45 @@ impl RglMaterial {
         })
     }
 
-    /// `(phi_i, theta_i)` parameters and the unit-square half vector `u_wm` for a pair of
-    /// upper-hemisphere directions; `None` when either is below the horizon.
-    fn half_vector(&self, wi: DVec3, wo: DVec3) -> Option<([f64; 2], [f64; 2], DVec3)> {
+    /// How directions are folded into the file's stored incident azimuths.
+    pub fn azimuth_fold(&self) -> AzimuthFold {
+        self.fold
+    }
+
+    /// The reflectance table `[np, nt, 3, ny, nx]` with its `nx` and `ny`: the file's
+    /// `rgb`, or, in a spectral file, its `spectra` over `wavelengths` projected to RGB.
+    fn rgb_table(
+        tf: &TensorFile<'_>,
+        np: usize,
+        nt: usize,
+    ) -> Result<(Vec<f64>, usize, usize), RglError> {
+        if let Ok(rf) = tf.field("rgb") {
+            check_shape(rf, "rgb", &[Some(np), Some(nt), Some(3), None, None])?;
+            return Ok((rf.f32_values("rgb")?, rf.shape[4], rf.shape[3]));
+        }
+        let (Ok(sf), Ok(wf)) = (tf.field("spectra"), tf.field("wavelengths")) else {
+            return Err(RglError::MissingField("rgb"));
+        };
+        check_shape(wf, "wavelengths", &[None])?;
+        let wavelengths = wf.f32_values("wavelengths")?;
+        let w = wavelengths.len();
+        check_shape(sf, "spectra", &[Some(np), Some(nt), Some(w), None, None])?;
+        let weights = spectral::rgb_weights(&wavelengths)?;
+        let (nx, ny) = (sf.shape[4], sf.shape[3]);
+        let nodes = nx.checked_mul(ny).ok_or(RglError::Overflow)?;
+        let rgb = spectral::spectra_to_rgb(&sf.f32_values("spectra")?, &weights, nodes);
+        Ok((rgb, nx, ny))
+    }
+
+    /// `(phi_i, theta_i)` parameters, the unit-square half vector `u_wm` and `wi . wm` for
+    /// a pair of upper-hemisphere directions, both folded into the stored azimuths; `None`
+    /// when either is below the horizon.
+    fn half_vector(&self, wi: DVec3, wo: DVec3) -> Option<([f64; 2], [f64; 2], f64)> {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return None;
         }
+        let signs = self.fold.signs(wi);
+        let (wi, wo) = (apply_signs(wi, signs), apply_signs(wo, signs));
         let wm = (wi + wo).try_normalize()?;
         let (theta_i, phi_i) = (wi.theta(), wi.phi());
         let phi_m = if self.isotropic {
@@ -188,14 +278,14 @@ impl RglMaterial {
         };
         let mut uy = phi_to_u(phi_m);
         uy -= uy.floor();
-        Some(([phi_i, theta_i], [theta_to_u(wm.theta()), uy], wm))
+        Some(([phi_i, theta_i], [theta_to_u(wm.theta()), uy], wi.dot(wm)))
     }
 
     /// The Jacobian `|d omega_o / d u_wm| = 2 pi^2 u_x sin theta_m * 4 (wi.wm)`, with the
     /// first factor clamped below by [`JACOBIAN_CLAMP`].
-    fn jacobian(u_wm: [f64; 2], wi: DVec3, wm: DVec3) -> f64 {
+    fn jacobian(u_wm: [f64; 2], wi_dot_wm: f64) -> f64 {
         let theta_m = u_to_theta(u_wm[0]);
-        (2.0 * PI * PI * u_wm[0] * theta_m.sin()).max(JACOBIAN_CLAMP) * 4.0 * wi.dot(wm)
+        (2.0 * PI * PI * u_wm[0] * theta_m.sin()).max(JACOBIAN_CLAMP) * 4.0 * wi_dot_wm
     }
 
     /// `f(wi, wo) |cos theta_o|` per channel (the file's native quantity, RGL-FORMAT.md
@@ -255,12 +345,14 @@ impl Material for RglMaterial {
     }
 
     /// Luminance-table sample in warped space, VNDF warp to the half vector, mirror
-    /// reflection (RGL-FORMAT.md "Sampling and PDF"). Reflections below the horizon are
-    /// lost.
-    fn sample(&self, wi: DVec3, u: [f64; 3]) -> Option<MaterialSample> {
-        if wi.z <= 0.0 {
+    /// reflection (RGL-FORMAT.md "Sampling and PDF"), in the stored azimuths (`wi` folded,
+    /// the sampled `wo` unfolded). Reflections below the horizon are lost.
+    fn sample(&self, wi_in: DVec3, u: [f64; 3]) -> Option<MaterialSample> {
+        if wi_in.z <= 0.0 {
             return None;
         }
+        let signs = self.fold.signs(wi_in);
+        let wi = apply_signs(wi_in, signs);
         let params = [wi.phi(), wi.theta()];
         let (s, _) = self.luminance.sample([u[0], u[1]], &params)?;
         let (u_m, _) = self.vndf.sample(s, &params)?;
@@ -269,31 +361,31 @@ impl Material for RglMaterial {
             phi_m += params[0];
         }
         let wm = from_spherical(u_to_theta(u_m[0]), phi_m);
-        let wo = reflect(wi, wm).try_normalize()?;
+        let wo = apply_signs(reflect(wi, wm).try_normalize()?, signs);
         if wo.z <= 0.0 {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
+        let pdf = self.pdf(wi_in, wo);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
         Some(MaterialSample {
             wo,
             pdf,
-            weight: self.eval_cos_rgb(wi, wo) * (1.0 / pdf),
+            weight: self.eval_cos_rgb(wi_in, wo) * (1.0 / pdf),
         })
     }
 
     /// `vndf_pdf(u_wm) lum(s) / jacobian`, with `s` from the inverse VNDF warp.
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        let Some((params, u_wm, wm)) = self.half_vector(wi, wo) else {
+        let Some((params, u_wm, wi_dot_wm)) = self.half_vector(wi, wo) else {
             return 0.0;
         };
         let Some((s, vndf_pdf)) = self.vndf.invert(u_wm, &params) else {
             return 0.0;
         };
         let lum = self.luminance.eval(s, &params);
-        let p = vndf_pdf * lum / Self::jacobian(u_wm, wi, wm);
+        let p = vndf_pdf * lum / Self::jacobian(u_wm, wi_dot_wm);
         if p.is_finite() && p > 0.0 {
             p
         } else {

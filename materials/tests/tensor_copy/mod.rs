@@ -1,5 +1,5 @@
 //! Writing RGL `tensor_file`s for the tests: a copy of a valid file with some of its fields
-//! rewritten (subsampled, repeated along an axis, replaced), in the container layout of
+//! rewritten (subsampled, repeated along an axis, replaced by one or more), in the container layout of
 //! `shared/RGL-FORMAT.md` ("Container").
 #![allow(dead_code)]
 
@@ -22,6 +22,8 @@ pub enum Rewrite {
     Gather(Vec<Vec<usize>>),
     /// Writes another field in its place.
     Replace(Out),
+    /// Writes these fields in its place.
+    ReplaceMany(Vec<Out>),
 }
 
 /// A copy of the valid file `bytes`, each field rewritten as `rewrite` says, in the
@@ -31,20 +33,21 @@ pub fn rewrite(bytes: &[u8], rewrite: impl Fn(&Field<'_>) -> Rewrite) -> Vec<u8>
     let fields: Vec<Out> = tf
         .fields
         .iter()
-        .map(|f| match rewrite(f) {
-            Rewrite::Keep => Out {
+        .flat_map(|f| match rewrite(f) {
+            Rewrite::Keep => vec![Out {
                 name: f.name.clone(),
                 dtype: code_of(f),
                 shape: f.shape.clone(),
                 data: f.bytes.to_vec(),
-            },
-            Rewrite::Gather(keep) => Out {
+            }],
+            Rewrite::Gather(keep) => vec![Out {
                 name: f.name.clone(),
                 dtype: code_of(f),
                 shape: keep.iter().map(Vec::len).collect(),
                 data: gather(f.bytes, &f.shape, &keep, f.bytes.len() / f.len().max(1)),
-            },
-            Rewrite::Replace(out) => out,
+            }],
+            Rewrite::Replace(out) => vec![out],
+            Rewrite::ReplaceMany(outs) => outs,
         })
         .collect();
     write_tensor_file(&fields)
