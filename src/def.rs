@@ -85,6 +85,54 @@ pub enum IncidentRange {
     WholeSphere,
 }
 
+/// A symmetry of an anisotropic material in the incident azimuth, which a model uses to
+/// learn only part of the turn: the nets see `wi` folded into it and a sample is unfolded
+/// by the same signs ([`crate::internals::frame::IncidentFrame::folding`]). Mirrors and
+/// a half turn keep solid angle, so every density is unchanged and the reported PDF
+/// stays exact. (An isotropic model's rotation, [`ModelDef::isotropic`], subsumes both.)
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum IncidentFold {
+    /// No fold: `wi` at every azimuth.
+    None,
+    /// Unchanged by a half turn about the normal (blob flag bit 8): a `wi` with `y > 0` is
+    /// turned by `pi`, so the nets see `phi_i` in `[-pi, 0]`.
+    HalfTurn,
+    /// Unchanged by mirroring `x` and by mirroring `y` (an anisotropic lobe aligned with
+    /// the axes; blob flag bit 9): `wi.x` and `wi.y` are each made negative or zero, so
+    /// the nets see `phi_i` in `[-pi, -pi/2]`.
+    Quarter,
+}
+
+impl IncidentFold {
+    /// The signs `(sx, sy)` that fold a `wi` with tangent part `(x, y)` into the kept part
+    /// of the turn (docs/math.md, (83)): `-1` where the coordinate is `>= 0` (so `-0`
+    /// counts as `>= 0`), for both from `y` on a half turn, each from its own on a
+    /// quarter; `(1, 1)` without a fold. The same signs fold a `wo` with it and unfold a
+    /// sampled one (each is its own inverse).
+    #[inline]
+    #[must_use]
+    pub fn signs(self, x: f32, y: f32) -> (f32, f32) {
+        let negate = |v: f32| if v >= 0.0 { -1.0 } else { 1.0 };
+        match self {
+            IncidentFold::None => (1.0, 1.0),
+            IncidentFold::HalfTurn => (negate(y), negate(y)),
+            IncidentFold::Quarter => (negate(x), negate(y)),
+        }
+    }
+
+    /// The kept azimuths `[start, start + span]` of `wi` (what the nets see): the whole
+    /// turn `[0, 2 pi]`, `[-pi, 0]` or `[-pi, -pi/2]`.
+    #[must_use]
+    pub fn kept_azimuths(self) -> (f32, f32) {
+        use core::f32::consts::{FRAC_PI_2, PI, TAU};
+        match self {
+            IncidentFold::None => (0.0, TAU),
+            IncidentFold::HalfTurn => (-PI, PI),
+            IncidentFold::Quarter => (-PI, FRAC_PI_2),
+        }
+    }
+}
+
 /// How weights are stored in the blob. The kernel evaluates in f32 either way; f16 blobs
 /// are half the size, and generated shaders can evaluate them in f16.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -269,6 +317,10 @@ pub struct ModelDef {
     /// The material is unchanged by rotations about the normal: the nets see `wi` turned
     /// into the xz-plane and samples are turned back ([`crate::internals::frame::IncidentFrame`]).
     pub isotropic: bool,
+    /// An anisotropic material's symmetry in the incident azimuth (blob flag bits 8, 9):
+    /// the nets see `wi` folded into part of the turn. A header error with
+    /// [`ModelDef::isotropic`].
+    pub fold: IncidentFold,
     /// Which `wi` the model was trained for and answers (blob flag bit 1 on the sphere;
     /// always the upper hemisphere on the disk). A sphere blob written before the flag
     /// existed has no bit and means [`IncidentRange::WholeSphere`].
@@ -312,6 +364,7 @@ impl ModelDef {
             },
             default_steps: 4,
             isotropic: false,
+            fold: IncidentFold::None,
             incident: IncidentRange::UpperHemisphere,
             standardized: false,
             standard_warp: false,

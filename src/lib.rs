@@ -60,8 +60,8 @@ pub use any_model::AnyModel;
 pub use batch::BatchError;
 pub use blob::BlobError;
 pub use def::{
-    encoding_len, Activation, Domain, IncidentRange, Layer, ModelDef, ModelName, Net, NetShape,
-    Precision, TableGrid, NAME_CAPACITY,
+    encoding_len, Activation, Domain, IncidentFold, IncidentRange, Layer, ModelDef, ModelName, Net,
+    NetShape, Precision, TableGrid, NAME_CAPACITY,
 };
 pub use model::{Model, Model3x32, Model4x32};
 pub use sampler::Sample;

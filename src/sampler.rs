@@ -10,6 +10,7 @@
 //! model's default. Densities are per unit solid angle. Invalid input, or a sample that
 //! leaves the domain, gives `None` (or a PDF of 0): the lost mass is never renormalised.
 
+use crate::def::IncidentFold;
 use crate::flow::Conditioned;
 use crate::frame::IncidentFrame;
 use crate::input::{uniform_pair, unit_direction};
@@ -205,13 +206,17 @@ impl<
     }
 
     /// The frame the nets work in, and `wi` in it: for an isotropic model the rotation that
-    /// puts `wi` at `phi = 0`, otherwise the identity.
+    /// puts `wi` at `phi = 0`, for a folded one the signs that fold `wi` into its part of
+    /// the turn, otherwise the identity.
     #[inline(always)]
     pub(crate) fn incident_frame(&self, wi: Vec3) -> (IncidentFrame, Vec3) {
-        if !self.def.isotropic {
+        let frame = if self.def.isotropic {
+            IncidentFrame::aligning(wi)
+        } else if self.def.fold != IncidentFold::None {
+            IncidentFrame::folding(wi, self.def.fold)
+        } else {
             return (IncidentFrame::IDENTITY, wi);
-        }
-        let frame = IncidentFrame::aligning(wi);
+        };
         (frame, frame.to_local(wi))
     }
 }

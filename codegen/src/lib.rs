@@ -235,7 +235,12 @@ pub(crate) fn header_lines(model: &ModelDesc, options: &Options, prefix: &str) -
         format!("model \"{name}\", blob CRC-32 {:08x}, {} parameters", model.crc32, model.params.len()),
         format!(
             "domain {domain}{}{}{}; base net {}x{} ({} freqs), velocity net {}x{} ({} freqs); {} default steps",
-            if d.isotropic { ", isotropic (nets see wi turned to phi = 0)" } else { "" },
+            match (d.isotropic, d.fold) {
+                (true, _) => ", isotropic (nets see wi turned to phi = 0)",
+                (false, diffbsdf::IncidentFold::HalfTurn) => ", folded by a half turn (nets see phi_i in [-pi, 0])",
+                (false, diffbsdf::IncidentFold::Quarter) => ", folded into a quarter turn (nets see phi_i in [-pi, -pi/2])",
+                (false, diffbsdf::IncidentFold::None) => "",
+            },
             if d.domain.is_spherical() && !d.accepts_incident_z(-1.0) { ", wi above the surface only" } else { "" },
             match (d.standardized, d.standard_warp) {
                 (true, true) => ", flow in the base's standard coordinates, compressed by K asinh(z / K)",

@@ -56,6 +56,7 @@ fn architecture(d: &ModelDef) -> impl PartialEq {
         d.base,
         d.velocity,
         d.isotropic,
+        d.fold,
         d.accepts_incident_z(-1.0),
         d.standardized,
         d.standard_warp,

@@ -1,12 +1,12 @@
-//! Golden files: the output for four small fixed random-weight models (disk, sphere,
-//! half-vector chart, and that with a latent table) in
+//! Golden files: the output for small fixed random-weight models (disk, sphere,
+//! half-vector chart, that with a latent table, and a folded anisotropic one) in
 //! every language and in the main option combinations is committed under
 //! `tests/golden/` and must not change unnoticed. Regenerate with
 //! `DIFFBSDF_BLESS=1 cargo test -p diffbsdf-codegen --test golden` and review the diff.
 
 mod support;
 
-use diffbsdf::{Domain, ModelDef, ModelName, NetShape, Precision, TableGrid};
+use diffbsdf::{Domain, IncidentFold, ModelDef, ModelName, NetShape, Precision, TableGrid};
 use diffbsdf_codegen::{generate, EntryPoints, Float, Language, Options, Weights};
 use std::path::Path;
 use support::vectors::random_blob;
@@ -21,6 +21,12 @@ fn tiny(domain: Domain, name: &str) -> Vec<u8> {
 /// [`tiny`], with a latent table on `table`'s grid in front of the half-vector flow (its
 /// node values in the parameter buffer: the golden files use buffer mode for it).
 fn tiny_with_table(domain: Domain, name: &str, table: Option<TableGrid>) -> Vec<u8> {
+    tiny_model(domain, name, table, IncidentFold::None)
+}
+
+/// [`tiny_with_table`] for an anisotropic model folded by `fold` (`IncidentFold::None`:
+/// isotropic off the sphere, as before).
+fn tiny_model(domain: Domain, name: &str, table: Option<TableGrid>, fold: IncidentFold) -> Vec<u8> {
     let def = ModelDef {
         domain,
         precision: Precision::F32,
@@ -36,7 +42,8 @@ fn tiny_with_table(domain: Domain, name: &str, table: Option<TableGrid>) -> Vec<
             hidden_layers: 2,
         },
         default_steps: 2,
-        isotropic: !domain.is_spherical(),
+        isotropic: !domain.is_spherical() && fold == IncidentFold::None,
+        fold,
         incident: if domain.is_spherical() {
             diffbsdf::IncidentRange::WholeSphere
         } else {
@@ -69,6 +76,12 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
         Domain::HalfVector,
         "tiny half vector blended",
         Some(TableGrid::BlendedSlices),
+    );
+    let quarter = tiny_model(
+        Domain::HalfVector,
+        "tiny half vector quarter",
+        None,
+        IncidentFold::Quarter,
     );
     let opt = |language, float, weights, entry_points| Options {
         language,
@@ -163,6 +176,12 @@ fn cases() -> Vec<(&'static str, Vec<u8>, Options)> {
             "half_vector_blended_table_buffer.h",
             blended_table,
             opt(Language::C, Float::F32, buf, EntryPoints::ALL),
+        ),
+        // an anisotropic model folded into a quarter of the turn (docs/math.md, (83))
+        (
+            "half_vector_quarter.h",
+            quarter,
+            opt(Language::C, Float::F32, Weights::Baked, EntryPoints::ALL),
         ),
         (
             "half_vector_all_f16_fused.wgsl",

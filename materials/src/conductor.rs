@@ -4,7 +4,7 @@
 use crate::fresnel::conductor_rgb;
 use crate::microfacet::Microfacet;
 use crate::spherical::reflect;
-use crate::{DVec3, Material, MaterialSample, Rgb};
+use crate::{DVec3, IncidentFold, Material, MaterialSample, Rgb};
 
 /// Named metals with RGB complex indices of refraction `eta + i k`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -158,5 +158,14 @@ impl Material for Conductor {
 
     fn is_isotropic(&self) -> bool {
         self.mf.is_isotropic()
+    }
+
+    /// An anisotropic lobe aligned with the axes is unchanged by mirroring either.
+    fn azimuth_fold(&self) -> IncidentFold {
+        if self.mf.is_isotropic() {
+            IncidentFold::None
+        } else {
+            IncidentFold::Quarter
+        }
     }
 }

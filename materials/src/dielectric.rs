@@ -6,7 +6,7 @@
 use crate::fresnel;
 use crate::microfacet::Microfacet;
 use crate::spherical::reflect;
-use crate::{DVec3, Material, MaterialSample, Rgb};
+use crate::{DVec3, IncidentFold, Material, MaterialSample, Rgb};
 
 /// A rough dielectric boundary with a white (colourless) response.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -181,6 +181,15 @@ impl Material for Dielectric {
 
     fn is_isotropic(&self) -> bool {
         self.mf.is_isotropic()
+    }
+
+    /// An anisotropic lobe aligned with the axes is unchanged by mirroring either.
+    fn azimuth_fold(&self) -> IncidentFold {
+        if self.mf.is_isotropic() {
+            IncidentFold::None
+        } else {
+            IncidentFold::Quarter
+        }
     }
 
     fn index_of_side(&self, w: DVec3) -> f64 {

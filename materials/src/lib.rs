@@ -37,6 +37,7 @@ pub mod rgl;
 pub mod spec;
 pub mod special;
 pub mod spherical;
+pub mod symmetry;
 pub mod target;
 pub mod warp;
 pub mod zoom;
@@ -45,6 +46,7 @@ pub use diffbsdf::glam::DVec3;
 pub use rgb::{luminance, Rgb};
 pub use spec::{parse_spec, SpecError};
 pub use spherical::{from_spherical, reflect, Spherical};
+pub use symmetry::IncidentFold;
 pub use target::{disk_target, sphere_target};
 
 /// One sample drawn by a material's own sampler.
@@ -92,6 +94,13 @@ pub trait Material: Send + Sync + std::fmt::Debug {
     /// True when the BSDF is unchanged by rotations about the normal:
     /// `f(R wi, R wo) = f(wi, wo)` for every rotation `R` about `z`.
     fn is_isotropic(&self) -> bool;
+
+    /// A symmetry of an anisotropic BSDF in the incident azimuth that a model may use to
+    /// learn part of the turn only: `f` is unchanged when `wi` and `wo` are folded
+    /// together by [`symmetry::fold_signs`]. `None` unless the material says so.
+    fn azimuth_fold(&self) -> IncidentFold {
+        IncidentFold::None
+    }
 
     /// Refractive index of the medium on the side of `w` relative to the outside (1 above
     /// the surface); used by the generalized reciprocity `f(wi,wo)/eta(wi)^2 =

@@ -237,3 +237,50 @@ fn white_furnace() {
     }
     println!("{report}worst {worst:.5}");
 }
+
+/// Every material that declares a fold of its incident azimuths (`Material::azimuth_fold`)
+/// has the symmetries it assumes: `f` and the PDF are unchanged when `wi` and `wo` are
+/// folded together, at random pairs over the sphere; an isotropic one declares none.
+#[test]
+fn declared_folds_are_symmetries() {
+    use diffbsdf_materials::symmetry::{apply_signs, fold_signs};
+    use diffbsdf_materials::IncidentFold;
+    let mut r = rng(77);
+    let mut folded = 0;
+    for (spec, _) in CONFIGS {
+        let m = parse_spec(spec).unwrap();
+        let fold = m.azimuth_fold();
+        if m.is_isotropic() {
+            assert_eq!(fold, IncidentFold::None, "{spec}");
+            continue;
+        }
+        folded += usize::from(fold != IncidentFold::None);
+        let sphere = |r: &mut rand_pcg::Pcg64| {
+            from_spherical(
+                (2.0 * r.gen::<f64>() - 1.0).acos(),
+                std::f64::consts::TAU * r.gen::<f64>(),
+            )
+        };
+        for _ in 0..200 {
+            let (wi, wo) = (sphere(&mut r), sphere(&mut r));
+            let signs = fold_signs(fold, wi);
+            let (fi, fo) = (apply_signs(signs, wi), apply_signs(signs, wo));
+            let (a, b) = (m.eval(wi, wo), m.eval(fi, fo));
+            for c in 0..3 {
+                assert!(
+                    (a.0[c] - b.0[c]).abs() <= 1e-9 * a.0[c].abs().max(1e-12),
+                    "{spec}"
+                );
+            }
+            let (p, q) = (m.pdf(wi, wo), m.pdf(fi, fo));
+            assert!(
+                (p - q).abs() <= 1e-9 * p.abs().max(1e-12),
+                "{spec}: {p} {q}"
+            );
+        }
+    }
+    assert!(
+        folded >= 2,
+        "only {folded} anisotropic materials declare a fold"
+    );
+}

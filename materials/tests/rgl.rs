@@ -10,7 +10,8 @@ mod common;
 mod tensor_copy;
 
 use common::{chi2_of_samples, dir_deg, rng, Domain, ALPHA};
-use diffbsdf_materials::rgl::{AzimuthFold, RglError, RglMaterial};
+use diffbsdf_materials::rgl::{RglError, RglMaterial};
+use diffbsdf_materials::IncidentFold;
 use diffbsdf_materials::{DVec3, Material};
 use rand::Rng;
 use std::f64::consts::PI;
@@ -221,9 +222,9 @@ fn copies_over_half_or_a_quarter_turn_fold_azimuths() {
     let full = RglMaterial::from_bytes(&anisotropic_copy(&bytes, 5)).unwrap();
     let half = RglMaterial::from_bytes(&azimuth_copy(&bytes, 4, -PI, 0.0)).unwrap();
     let quarter = RglMaterial::from_bytes(&azimuth_copy(&bytes, 3, -PI, -PI / 2.0)).unwrap();
-    assert_eq!(full.azimuth_fold(), AzimuthFold::None);
-    assert_eq!(half.azimuth_fold(), AzimuthFold::HalfTurn);
-    assert_eq!(quarter.azimuth_fold(), AzimuthFold::Quarter);
+    assert_eq!(full.azimuth_fold(), IncidentFold::None);
+    assert_eq!(half.azimuth_fold(), IncidentFold::HalfTurn);
+    assert_eq!(quarter.azimuth_fold(), IncidentFold::Quarter);
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
     // Inside its stored range a folded copy reads the tables as the whole-turn copy does.
     for (m, phi_i) in [(&half, -1.0), (&quarter, -2.0)] {

@@ -16,7 +16,8 @@ pub use writer::{blob_len, write_blob};
 
 use crate::base::table::{code_value, LatentTable, TableGrid};
 use crate::def::{
-    Activation, Domain, IncidentRange, ModelDef, ModelName, NetShape, Precision, NAME_CAPACITY,
+    Activation, Domain, IncidentFold, IncidentRange, ModelDef, ModelName, NetShape, Precision,
+    NAME_CAPACITY,
 };
 use cursor::Cursor;
 
@@ -231,11 +232,31 @@ impl RawHeader {
         }
     }
 
+    /// The incident fold from flag bits 8 and 9 (both, or either with the isotropic bit 0,
+    /// is an error).
+    fn fold(&self) -> Result<IncidentFold, BlobError> {
+        let isotropic = self.flags & FLAG_ISOTROPIC != 0;
+        match (
+            self.flags & FLAG_HALF_TURN != 0,
+            self.flags & FLAG_QUARTER != 0,
+        ) {
+            (false, false) => Ok(IncidentFold::None),
+            (true, true) => Err(BlobError::BadHeader("two incident folds")),
+            _ if isotropic => Err(BlobError::BadHeader(
+                "an incident fold on an isotropic model",
+            )),
+            (true, false) => Ok(IncidentFold::HalfTurn),
+            (false, true) => Ok(IncidentFold::Quarter),
+        }
+    }
+
     fn into_def(self, precision: Precision) -> Result<ModelDef, BlobError> {
         let domain = Domain::from_code(self.domain).ok_or(BlobError::UnknownDomain(self.domain))?;
         let activation = Activation::from_code(self.activation)
             .ok_or(BlobError::UnknownActivation(self.activation))?;
         let known = FLAG_ISOTROPIC
+            | FLAG_HALF_TURN
+            | FLAG_QUARTER
             | FLAG_UPPER_HEMISPHERE
             | FLAG_STANDARDIZED
             | FLAG_STANDARD_WARP
@@ -259,6 +280,7 @@ impl RawHeader {
             ));
         }
         let latent_table = self.table_grid()?;
+        let fold = self.fold()?;
         if latent_table.is_some() && !standardized {
             return Err(BlobError::BadHeader(
                 "a latent table without standard coordinates",
@@ -291,6 +313,7 @@ impl RawHeader {
             velocity: self.velocity,
             default_steps: self.default_steps,
             isotropic: self.flags & FLAG_ISOTROPIC != 0,
+            fold,
             incident: if self.flags & FLAG_UPPER_HEMISPHERE != 0 || !domain.is_spherical() {
                 IncidentRange::UpperHemisphere
             } else {
@@ -314,6 +337,12 @@ impl RawHeader {
 
 /// Header flag (bytes 28..32, u32): the model is isotropic.
 pub(crate) const FLAG_ISOTROPIC: u32 = 1;
+/// Header flag: an anisotropic model folds `wi` by a half turn ([`IncidentFold::HalfTurn`];
+/// not with [`FLAG_ISOTROPIC`] or [`FLAG_QUARTER`]).
+pub(crate) const FLAG_HALF_TURN: u32 = 256;
+/// Header flag: an anisotropic model folds `wi` into a quarter of the turn
+/// ([`IncidentFold::Quarter`]; not with [`FLAG_ISOTROPIC`] or [`FLAG_HALF_TURN`]).
+pub(crate) const FLAG_QUARTER: u32 = 512;
 
 /// Header flag: the flow runs in the base distribution's standard coordinates
 /// ([`ModelDef::standardized`]; disk and half-vector chart only).

@@ -2,11 +2,11 @@
 
 use super::{
     body_len, crc32, BlobError, CHECKSUM_LEN, FLAG_BLENDED_SLICES, FLAG_CODED_TABLE,
-    FLAG_ISOTROPIC, FLAG_LATENT_TABLE, FLAG_STANDARDIZED, FLAG_STANDARD_WARP,
-    FLAG_UPPER_HEMISPHERE, FLAG_WARPED_TABLE, HEADER_LEN, MAGIC, VERSION,
+    FLAG_HALF_TURN, FLAG_ISOTROPIC, FLAG_LATENT_TABLE, FLAG_QUARTER, FLAG_STANDARDIZED,
+    FLAG_STANDARD_WARP, FLAG_UPPER_HEMISPHERE, FLAG_WARPED_TABLE, HEADER_LEN, MAGIC, VERSION,
 };
 use crate::base::table::{encode, TableGrid};
-use crate::def::IncidentRange;
+use crate::def::{IncidentFold, IncidentRange};
 use crate::def::{ModelDef, NetShape, Precision, NAME_CAPACITY};
 
 /// Bytes of the blob for `def`: the header, the nets' weights at `def.precision`, the
@@ -130,6 +130,11 @@ fn write_header(def: &ModelDef, h: &mut [u8]) {
     h[22..24].copy_from_slice(&def.default_steps.to_le_bytes());
     h[24..28].copy_from_slice(&(def.param_count() as u32).to_le_bytes());
     let mut flags = if def.isotropic { FLAG_ISOTROPIC } else { 0 };
+    flags |= match def.fold {
+        IncidentFold::None => 0,
+        IncidentFold::HalfTurn => FLAG_HALF_TURN,
+        IncidentFold::Quarter => FLAG_QUARTER,
+    };
     // Implied on the disk: disk blobs keep the bytes they had before the flag existed.
     if def.domain.is_spherical() && def.incident == IncidentRange::UpperHemisphere {
         flags |= FLAG_UPPER_HEMISPHERE;

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use diffbsdf::internals::Diagnostics;
-use diffbsdf::{Domain, Model3x32, Model4x32, ModelDef, Net};
+use diffbsdf::{Domain, IncidentFold, Model3x32, Model4x32, ModelDef, Net};
 
 /// A small seeded generator (SplitMix64) so tests need no extra crate.
 pub struct Rng(u64);
@@ -330,4 +330,25 @@ pub fn random_isotropic_half_vector(seed: u64, min_steps: u32) -> Model3x32 {
         m.params(p).unwrap();
     });
     Model3x32::from_params(def, &p).unwrap()
+}
+
+/// [`random_half_vector`] folded by `fold` (anisotropic: the nets see `wi` folded into
+/// part of the turn).
+pub fn random_folded_half_vector(seed: u64, min_steps: u32, fold: IncidentFold) -> Model3x32 {
+    let m = random_half_vector(seed, min_steps);
+    let mut def = *m.def();
+    def.fold = fold;
+    let mut p = vec![0.0; def.param_count()];
+    m.params(&mut p).unwrap();
+    Model3x32::from_params(def, &p).unwrap()
+}
+
+/// [`random_sphere`] folded by `fold`.
+pub fn random_folded_sphere(seed: u64, min_steps: u32, fold: IncidentFold) -> Model4x32 {
+    let m = random_sphere(seed, min_steps);
+    let mut def = *m.def();
+    def.fold = fold;
+    let mut p = vec![0.0; def.param_count()];
+    m.params(&mut p).unwrap();
+    Model4x32::from_params(def, &p).unwrap()
 }

@@ -5,7 +5,7 @@ use crate::data::{exact_pairs, exact_pairs_uniform_angle, Band, ExactConfig, Pai
 use crate::features::push_encoding;
 use diffbsdf::spec::MAX_FREQS;
 use diffbsdf::{encoding_len, Domain};
-use diffbsdf_materials::{DVec3, Material, Spherical};
+use diffbsdf_materials::{DVec3, IncidentFold, Material, Spherical};
 
 /// Anything that yields training pairs `(wi, x1)` for a domain.
 pub trait TrainingData {
@@ -16,6 +16,12 @@ pub trait TrainingData {
     /// `phi = 0`); the fitted model then turns `wi` the same way.
     fn isotropic(&self) -> bool {
         false
+    }
+
+    /// The fold of the incident azimuths the pairs are in (an anisotropic material's
+    /// symmetry); the fitted model then folds `wi` the same way.
+    fn fold(&self) -> IncidentFold {
+        IncidentFold::None
     }
 }
 
@@ -35,6 +41,8 @@ pub struct TrainingSet {
     pub x1: Vec<[f32; 2]>,
     /// The pairs are in the incident frame (see [`TrainingData::isotropic`]).
     pub isotropic: bool,
+    /// The pairs are folded (see [`TrainingData::fold`]).
+    pub fold: IncidentFold,
     /// Start of each run of consecutive pairs with the same `wi` (bit for bit), then the
     /// number of pairs.
     run_starts: Vec<usize>,
@@ -52,6 +60,7 @@ impl TrainingSet {
             enc: Vec::with_capacity(pairs.len() * encoding_len(freqs)),
             x1: Vec::with_capacity(pairs.len()),
             isotropic: false,
+            fold: IncidentFold::None,
             run_starts: Vec::new(),
         };
         for &(wi, x1) in pairs {
@@ -84,6 +93,7 @@ impl TrainingSet {
     pub fn from_source(domain: Domain, freqs: u8, source: &dyn TrainingData) -> Self {
         let mut set = Self::new(domain, freqs, &source.pairs());
         set.isotropic = source.isotropic();
+        set.fold = source.fold();
         set
     }
 
@@ -128,6 +138,9 @@ pub struct MaterialPairs<'a> {
     pub grazing: f64,
     /// Turn every pair into the incident frame (for an isotropic material).
     pub isotropic: bool,
+    /// Fold every pair into the part of the turn this keeps (for an anisotropic material
+    /// with that symmetry; not with `isotropic`).
+    pub fold: IncidentFold,
     /// Isotropic fits: fraction of `wi` drawn with `theta_i` uniform in angle (the rest
     /// uniform in solid angle).
     pub angle_fraction: f64,
@@ -179,12 +192,16 @@ impl TrainingData for MaterialPairs<'_> {
         }
         pairs
             .iter()
-            .filter_map(|p| to_flow_pair(self.domain, p, self.isotropic))
+            .filter_map(|p| to_flow_pair(self.domain, &p.folded(self.fold), self.isotropic))
             .collect()
     }
 
     fn isotropic(&self) -> bool {
         self.isotropic
+    }
+
+    fn fold(&self) -> IncidentFold {
+        self.fold
     }
 }
 

@@ -16,7 +16,7 @@ use crate::reflow::reflow_pairs;
 use crate::start::StartDist;
 use diffbsdf::internals::base::{warp, BaseDist};
 use diffbsdf::spec::MAX_FREQS;
-use diffbsdf::{AnyModel, Domain, IncidentRange, ModelDef, ModelName, Net, NetShape};
+use diffbsdf::{AnyModel, Domain, IncidentFold, IncidentRange, ModelDef, ModelName, Net, NetShape};
 use diffbsdf_materials::Material;
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
@@ -312,6 +312,11 @@ pub fn fit_material(
         seed: cfg.seed,
         grazing: cfg.grazing,
         isotropic: cfg.use_isotropy && material.is_isotropic(),
+        fold: if cfg.use_isotropy && !material.is_isotropic() {
+            material.azimuth_fold()
+        } else {
+            IncidentFold::None
+        },
         angle_fraction: cfg.angle_fraction,
         group: cfg.teacher.ot_group.max(1),
     };
@@ -388,6 +393,7 @@ pub fn fit_data(
     def.name = ModelName::new(name).ok_or(TrainError::NameTooLong)?;
     def.default_steps = def.default_steps.max(1);
     def.isotropic = data.isotropic;
+    def.fold = data.fold;
     // The model is declared for the incident directions it was trained on.
     def.incident = if data.wi.iter().any(|wi| wi[2] < 0.0) {
         IncidentRange::WholeSphere

@@ -61,7 +61,7 @@ impl Emitter<'_> {
         self.code.close("}");
         self.chart_point();
         let td = self.call("to_direction", false, &self.point_args("a", "b"));
-        if self.m.def.isotropic {
+        if self.has_frame() {
             self.decl(rt, "r", &td);
             self.turn_back("r");
             self.code.line("return r;");
@@ -94,7 +94,7 @@ impl Emitter<'_> {
         if self.half_vector() {
             ps.extend([(T::F, "lwx"), (T::F, "lwy"), (T::F, "lwz")]);
         }
-        if self.m.def.isotropic {
+        if self.has_frame() {
             ps.push((self.st("Frame"), "fr"));
         }
         self.fn_open(qt.clone(), "returned", false, &ps);
@@ -226,7 +226,7 @@ impl Emitter<'_> {
         if self.half_vector() {
             qa.extend(["lwx", "lwy", "lwz"]);
         }
-        if self.m.def.isotropic {
+        if self.has_frame() {
             qa.push("fr");
         }
         let ret = self.call("returned", false, &qa);

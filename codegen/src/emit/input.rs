@@ -72,17 +72,10 @@ impl Emitter<'_> {
             "h",
             &format!("{} / {}", self.f(1.0), self.d.cast(&T::F, "n")),
         );
-        let enc = if self.m.def.isotropic {
+        let enc = if self.has_frame() {
             self.incident_frame();
-            self.call(
-                "encode",
-                false,
-                &[
-                    "fr.c * wi.x + fr.s * wi.y",
-                    "fr.c * wi.y - fr.s * wi.x",
-                    "wi.z",
-                ],
-            )
+            let (lx, ly) = self.to_local_xy("wi.x", "wi.y");
+            self.call("encode", false, &[&lx, &ly, "wi.z"])
         } else {
             self.call("encode", false, &["wi.x", "wi.y", "wi.z"])
         };
@@ -94,11 +87,13 @@ impl Emitter<'_> {
         }
     }
 
-    /// `lwx, lwy, lwz`: `wi` in the incident frame (the world's for an anisotropic model).
+    /// `lwx, lwy, lwz`: `wi` in the incident frame (the world's for an anisotropic model
+    /// without a fold).
     fn local_incident(&mut self) {
-        if self.m.def.isotropic {
-            self.decl(T::F, "lwx", "fr.c * wi.x + fr.s * wi.y");
-            self.decl(T::F, "lwy", "fr.c * wi.y - fr.s * wi.x");
+        if self.has_frame() {
+            let (lx, ly) = self.to_local_xy("wi.x", "wi.y");
+            self.decl(T::F, "lwx", &lx);
+            self.decl(T::F, "lwy", &ly);
         } else {
             self.decl(T::F, "lwx", "wi.x");
             self.decl(T::F, "lwy", "wi.y");

@@ -10,7 +10,7 @@
 //! | `warp.rs`    | `src/base/warp.rs`: the warp of the standard coordinates |
 //! | `table.rs`   | `src/base/table.rs`, `gaussian::cdf`: the latent table   |
 //! | `domain.rs`  | `src/domain/`: wrap, features, advance, directions       |
-//! | `frame.rs`   | `src/frame.rs`: the incident frame of isotropic models   |
+//! | `frame.rs`   | `src/frame.rs`: the incident frame (isotropic, folded)   |
 //! | `input.rs`   | `src/input.rs`: input checks, the entry points' prologue |
 //! | `forward.rs` | `src/flow/forward.rs`, `src/sampler.rs`: Euler steps     |
 //! | `inverse.rs` | `src/flow/inverse.rs`: the Newton inverse, the PDF       |
@@ -229,7 +229,7 @@ impl<'a> Emitter<'a> {
         // src/sampler.rs, src/input.rs, src/frame.rs, src/domain: results and inputs.
         self.none();
         self.unit();
-        if self.m.def.isotropic {
+        if self.has_frame() {
             self.frame();
         }
         if self.needs_base_sample() {
@@ -335,8 +335,8 @@ impl<'a> Emitter<'a> {
             ];
             lines.extend(self.d.struct_decl(&self.p("Cols"), &f));
         }
-        if self.m.def.isotropic {
-            lines.push("// A rotation about the normal: cos and sin of its angle.".into());
+        if self.has_frame() {
+            lines.push(self.frame_comment().into());
             lines.extend(
                 self.d
                     .struct_decl(&self.p("Frame"), &[(T::F, "c"), (T::F, "s")]),

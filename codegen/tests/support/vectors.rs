@@ -6,7 +6,7 @@
 use diffbsdf::glam::{Vec2, Vec3};
 use diffbsdf::internals::blob::{blob_len, write_blob};
 use diffbsdf::internals::Diagnostics;
-use diffbsdf::{AnyModel, Domain, ModelDef, ModelName, Net, Precision, TableGrid};
+use diffbsdf::{AnyModel, Domain, IncidentFold, ModelDef, ModelName, Net, Precision, TableGrid};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -254,15 +254,17 @@ pub fn test_models() -> Vec<TestModel> {
                 1.2,
             ),
         },
-        // A latent table in front of the warped flow (docs/math.md, §6.5), anisotropic,
-        // on the 32 slices with warped axes (81) (the shipped anisotropic copper has the
-        // table on even cells, the other shipped tables the blended layout's 40 slices).
+        // A latent table in front of the warped flow (docs/math.md, §6.5), anisotropic
+        // and folded into a quarter of the turn (83), on the 32 slices with warped axes
+        // (81) (the shipped anisotropic copper has the table on even cells and no fold, the
+        // other shipped tables the blended layout's 40 slices).
         TestModel {
             name: "random_half_vector_table".into(),
             blob: random_blob(
                 &named(
                     ModelDef {
                         latent_table: Some(TableGrid::WarpedCodes),
+                        fold: IncidentFold::Quarter,
                         ..warped(half_vector)
                     },
                     "random_half_vector_table",
@@ -289,13 +291,16 @@ pub fn test_models() -> Vec<TestModel> {
                 1.2,
             ),
         },
-        // Anisotropic, on the sphere, declared for the upper hemisphere, f16 weights: no
-        // shipped model has this combination.
+        // Anisotropic and folded by a half turn (83), on the sphere, declared for the upper
+        // hemisphere, f16 weights: no shipped model has this combination.
         TestModel {
             name: "random_sphere_aniso_upper_f16".into(),
             blob: random_blob(
                 &named(
-                    upper(sphere),
+                    ModelDef {
+                        fold: IncidentFold::HalfTurn,
+                        ..upper(sphere)
+                    },
                     "random_sphere_aniso_upper_f16",
                     Precision::F16,
                 ),

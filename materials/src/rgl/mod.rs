@@ -23,6 +23,7 @@ pub use tensor::TensorFile;
 pub use warp2d::Warp2D;
 
 use crate::spherical::{from_spherical, reflect, Spherical};
+use crate::symmetry::{apply_signs, fold_signs, IncidentFold};
 use crate::{DVec3, Material, MaterialSample, Rgb};
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -50,51 +51,21 @@ fn u_to_phi(u: f64) -> f64 {
     (2.0 * u - 1.0) * PI
 }
 
-/// Which part of the turn an anisotropic file's incident azimuths cover, and so how
-/// directions are folded into it (Mitsuba's `measured` plugin: the span's share of
-/// `2 pi`, rounded).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AzimuthFold {
-    /// The whole turn (and every isotropic file): no folding.
-    None,
-    /// Half the turn, `[-pi, 0]`: a `wi` with `y > 0` is turned by `pi` about the normal.
-    HalfTurn,
-    /// A quarter, `[-pi, -pi/2]`: `x` and `y` are each mirrored to be negative.
-    Quarter,
-}
-
-impl AzimuthFold {
-    /// From the stored incident azimuths; an error for a span that is not a whole, half
-    /// or quarter turn.
-    fn of(phi_i: &[f64], isotropic: bool) -> Result<Self, RglError> {
-        if isotropic {
-            return Ok(AzimuthFold::None);
-        }
-        let span = phi_i[phi_i.len() - 1] - phi_i[0];
-        // Saturating cast: a NaN or huge share is none of the three.
-        match (2.0 * PI / span).round() as i64 {
-            1 => Ok(AzimuthFold::None),
-            2 => Ok(AzimuthFold::HalfTurn),
-            4 => Ok(AzimuthFold::Quarter),
-            _ => Err(RglError::BadAngles("phi_i")),
-        }
+/// How a file's stored incident azimuths fold directions (Mitsuba's `measured` plugin:
+/// the span's share of `2 pi`, rounded); an error for a span that is not a whole, half or
+/// quarter turn. Isotropic files do not fold.
+fn azimuth_fold_of(phi_i: &[f64], isotropic: bool) -> Result<IncidentFold, RglError> {
+    if isotropic {
+        return Ok(IncidentFold::None);
     }
-
-    /// The signs `(sx, sy)` that fold `wi` into the stored range; the same signs fold a
-    /// `wo` with it and unfold a sampled one (each is its own inverse).
-    fn signs(self, wi: DVec3) -> (f64, f64) {
-        let negate = |v: f64| if v >= 0.0 { -1.0 } else { 1.0 };
-        match self {
-            AzimuthFold::None => (1.0, 1.0),
-            AzimuthFold::HalfTurn => (negate(wi.y), negate(wi.y)),
-            AzimuthFold::Quarter => (negate(wi.x), negate(wi.y)),
-        }
+    let span = phi_i[phi_i.len() - 1] - phi_i[0];
+    // Saturating cast: a NaN or huge share is none of the three.
+    match (2.0 * PI / span).round() as i64 {
+        1 => Ok(IncidentFold::None),
+        2 => Ok(IncidentFold::HalfTurn),
+        4 => Ok(IncidentFold::Quarter),
+        _ => Err(RglError::BadAngles("phi_i")),
     }
-}
-
-/// `w` with its `x` and `y` multiplied by the signs of [`AzimuthFold::signs`].
-fn apply_signs(w: DVec3, (sx, sy): (f64, f64)) -> DVec3 {
-    DVec3::new(w.x * sx, w.y * sy, w.z)
 }
 
 /// A measured isotropic or anisotropic BSDF, RGB or spectral (read as RGB).
@@ -104,7 +75,7 @@ pub struct RglMaterial {
     /// The `description` text of the file.
     pub description: String,
     isotropic: bool,
-    fold: AzimuthFold,
+    fold: IncidentFold,
     jacobian: bool,
     ndf: Warp2D,
     sigma: Warp2D,
@@ -165,7 +136,7 @@ impl RglMaterial {
             return Err(RglError::BadAngles("theta_i"));
         }
         let isotropic = np <= 2;
-        let fold = AzimuthFold::of(&phi_i, isotropic)?;
+        let fold = azimuth_fold_of(&phi_i, isotropic)?;
         let jacobian = match tf.field("jacobian") {
             Ok(f) => f.bytes.first().copied().unwrap_or(0) != 0,
             Err(_) => false,
@@ -230,11 +201,6 @@ impl RglMaterial {
         })
     }
 
-    /// How directions are folded into the file's stored incident azimuths.
-    pub fn azimuth_fold(&self) -> AzimuthFold {
-        self.fold
-    }
-
     /// The reflectance table `[np, nt, 3, ny, nx]` with its `nx` and `ny`: the file's
     /// `rgb`, or, in a spectral file, its `spectra` over `wavelengths` projected to RGB.
     fn rgb_table(
@@ -267,8 +233,8 @@ impl RglMaterial {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return None;
         }
-        let signs = self.fold.signs(wi);
-        let (wi, wo) = (apply_signs(wi, signs), apply_signs(wo, signs));
+        let signs = fold_signs(self.fold, wi);
+        let (wi, wo) = (apply_signs(signs, wi), apply_signs(signs, wo));
         let wm = (wi + wo).try_normalize()?;
         let (theta_i, phi_i) = (wi.theta(), wi.phi());
         let phi_m = if self.isotropic {
@@ -351,8 +317,8 @@ impl Material for RglMaterial {
         if wi_in.z <= 0.0 {
             return None;
         }
-        let signs = self.fold.signs(wi_in);
-        let wi = apply_signs(wi_in, signs);
+        let signs = fold_signs(self.fold, wi_in);
+        let wi = apply_signs(signs, wi_in);
         let params = [wi.phi(), wi.theta()];
         let (s, _) = self.luminance.sample([u[0], u[1]], &params)?;
         let (u_m, _) = self.vndf.sample(s, &params)?;
@@ -361,7 +327,7 @@ impl Material for RglMaterial {
             phi_m += params[0];
         }
         let wm = from_spherical(u_to_theta(u_m[0]), phi_m);
-        let wo = apply_signs(reflect(wi, wm).try_normalize()?, signs);
+        let wo = apply_signs(signs, reflect(wi, wm).try_normalize()?);
         if wo.z <= 0.0 {
             return None;
         }
@@ -399,5 +365,10 @@ impl Material for RglMaterial {
 
     fn is_isotropic(&self) -> bool {
         self.isotropic
+    }
+
+    /// The fold of the file's stored incident azimuths.
+    fn azimuth_fold(&self) -> IncidentFold {
+        self.fold
     }
 }

@@ -2,7 +2,8 @@
 
 use diffbsdf::spec::NORMAL_INCIDENCE_RHO;
 use diffbsdf::Domain;
-use diffbsdf_materials::{DVec3, Material, Spherical};
+use diffbsdf_materials::symmetry::{apply_signs, fold_signs};
+use diffbsdf_materials::{DVec3, IncidentFold, Material, Spherical};
 use std::f64::consts::PI;
 
 /// What the trainer needs of the kernel's [`Domain`] beyond its flow maps: which
@@ -115,6 +116,19 @@ impl Pair {
     }
 }
 
+impl Pair {
+    /// The pair folded into the part of the turn `fold` keeps: both directions' signs
+    /// changed by [`diffbsdf_materials::symmetry::fold_signs`] of `wi` (the kernel's
+    /// `IncidentFrame::folding`), for a material with that symmetry.
+    pub fn folded(&self, fold: IncidentFold) -> Pair {
+        let signs = fold_signs(fold, self.wi);
+        Pair {
+            wi: apply_signs(signs, self.wi),
+            wo: apply_signs(signs, self.wo),
+        }
+    }
+}
+
 /// Generated pairs with throughput figures.
 #[derive(Clone, Debug)]
 pub struct Generated {
@@ -161,6 +175,29 @@ mod tests {
             for (mine, w) in [(p.wi, wi), (p.wo, wo)] {
                 let kernel = frame.to_local(f32s(w));
                 assert!((f32s(mine) - kernel).length() < 1e-6, "{mine:?} {kernel:?}");
+            }
+        }
+    }
+
+    /// Folded pairs are the kernel's folding of them, bit for bit after rounding (sign
+    /// changes are exact), and `wi` lands in the kept azimuths.
+    #[test]
+    fn folded_pair_is_the_kernels() {
+        let f32s = |w: DVec3| glam::Vec3::new(w.x as f32, w.y as f32, w.z as f32);
+        for fold in [IncidentFold::HalfTurn, IncidentFold::Quarter] {
+            let (start, span) = fold.kept_azimuths();
+            for (wi, wo) in [
+                (DVec3::new(-0.3, 0.5, 0.8124), DVec3::new(0.6, 0.0, 0.8)),
+                (DVec3::new(0.3, -0.5, 0.8124), DVec3::new(-0.48, 0.64, 0.6)),
+                (DVec3::new(0.3, 0.5, -0.8124), DVec3::new(0.0, 0.6, 0.8)),
+                (DVec3::new(-0.3, -0.5, 0.8124), DVec3::new(0.0, -0.6, 0.8)),
+            ] {
+                let p = Pair { wi, wo }.folded(fold);
+                let frame = IncidentFrame::folding(f32s(wi), fold);
+                assert_eq!(f32s(p.wi), frame.to_local(f32s(wi)));
+                assert_eq!(f32s(p.wo), frame.to_local(f32s(wo)));
+                let phi = p.wi.y.atan2(p.wi.x) as f32;
+                assert!((start..=start + span).contains(&phi), "{fold:?} {phi}");
             }
         }
     }

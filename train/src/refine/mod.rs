@@ -27,7 +27,7 @@ use crate::progress::Progress;
 use diffbsdf::glam::Vec3;
 use diffbsdf::internals::base::BaseDist;
 use diffbsdf::spec::BASE_OUTPUTS;
-use diffbsdf::{AnyModel, IncidentRange, ModelDef, Net};
+use diffbsdf::{AnyModel, IncidentFold, IncidentRange, ModelDef, Net};
 use diffbsdf_materials::{DVec3, Material};
 use net::Transposed;
 use path::{Paths, BATCH};
@@ -205,10 +205,11 @@ fn draw_incidence(def: &ModelDef, grazing_share: f32, rng: &mut Pcg64) -> Vec3 {
     } else {
         theta
     };
+    let (start, span) = def.fold.kept_azimuths();
     let phi = if def.isotropic {
         0.0
     } else {
-        std::f32::consts::TAU * rng.gen::<f32>()
+        start + span * rng.gen::<f32>()
     };
     incidence(theta, phi)
 }
@@ -258,7 +259,15 @@ fn validation_loss(def: &ModelDef, nets: &Nets, material: &dyn Material) -> f64 
             } else {
                 std::f32::consts::PI - theta
             };
-            let phi = if def.isotropic { 0.0 } else { 2.4 * k as f32 };
+            let phi = match (def.isotropic, def.fold) {
+                (true, _) => 0.0,
+                (false, IncidentFold::None) => 2.4 * k as f32,
+                // Spread over the kept azimuths by the same golden-ish step.
+                (false, fold) => {
+                    let (start, span) = fold.kept_azimuths();
+                    start + span * (2.4 * k as f32 / std::f32::consts::TAU).fract()
+                }
+            };
             let wi = incidence(theta, phi);
             let seed = 0x7a11_da7e ^ i as u64;
             let cfg = RefineConfig {
