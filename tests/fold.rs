@@ -66,59 +66,54 @@ fn check(
     Ok(())
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+/// A proptest that a folded model of the given kind matches its unfolded twin (`check`).
+macro_rules! twin_test {
+    ($name:ident, $folded:ident, $plain:ident, $upper:expr) => {
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
 
-    #[test]
-    fn folded_half_vector_is_its_twin_at_the_folded_wi(
-        seed in 0u64..32, a in 0.0f32..1.0, b in 0.0f32..1.0,
-        u0 in 0.0f32..1.0, u1 in 0.0f32..1.0, steps in 1u32..=8, quarter in any::<bool>(),
-    ) {
-        let fold = if quarter { IncidentFold::Quarter } else { IncidentFold::HalfTurn };
-        let m = random_folded_half_vector(seed, 1, fold);
-        let twin = random_half_vector(seed, 1);
-        let folded = |wi: Vec3, u: Vec2| {
-            (
-                m.sample_steps(wi, u, steps).map(|s| (s.wo, s.pdf)),
-                m.sample_direction_steps(wi, u, steps),
-            )
-        };
-        let plain = |wi: Vec3, u: Vec2| {
-            (
-                twin.sample_steps(wi, u, steps).map(|s| (s.wo, s.pdf)),
-                twin.sample_direction_steps(wi, u, steps),
-            )
-        };
-        let pdf = |wi: Vec3, wo: Vec3| m.pdf_steps(wi, wo, steps);
-        let twin_pdf = |wi: Vec3, wo: Vec3| twin.pdf_steps(wi, wo, steps);
-        check(fold, folded, plain, pdf, twin_pdf, direction(a, b, true), Vec2::new(u0, u1))?;
-    }
-
-    #[test]
-    fn folded_sphere_is_its_twin_at_the_folded_wi(
-        seed in 0u64..32, a in 0.0f32..1.0, b in 0.0f32..1.0,
-        u0 in 0.0f32..1.0, u1 in 0.0f32..1.0, steps in 1u32..=8, quarter in any::<bool>(),
-    ) {
-        let fold = if quarter { IncidentFold::Quarter } else { IncidentFold::HalfTurn };
-        let m = random_folded_sphere(seed, 1, fold);
-        let twin = random_sphere(seed, 1);
-        let folded = |wi: Vec3, u: Vec2| {
-            (
-                m.sample_steps(wi, u, steps).map(|s| (s.wo, s.pdf)),
-                m.sample_direction_steps(wi, u, steps),
-            )
-        };
-        let plain = |wi: Vec3, u: Vec2| {
-            (
-                twin.sample_steps(wi, u, steps).map(|s| (s.wo, s.pdf)),
-                twin.sample_direction_steps(wi, u, steps),
-            )
-        };
-        let pdf = |wi: Vec3, wo: Vec3| m.pdf_steps(wi, wo, steps);
-        let twin_pdf = |wi: Vec3, wo: Vec3| twin.pdf_steps(wi, wo, steps);
-        check(fold, folded, plain, pdf, twin_pdf, direction(a, b, false), Vec2::new(u0, u1))?;
-    }
+            #[test]
+            fn $name(
+                seed in 0u64..32, a in 0.0f32..1.0, b in 0.0f32..1.0,
+                u0 in 0.0f32..1.0, u1 in 0.0f32..1.0, steps in 1u32..=8,
+                quarter in any::<bool>(),
+            ) {
+                let fold = if quarter { IncidentFold::Quarter } else { IncidentFold::HalfTurn };
+                let m = $folded(seed, 1, fold);
+                let twin = $plain(seed, 1);
+                let folded = |wi: Vec3, u: Vec2| {
+                    (
+                        m.sample_steps(wi, u, steps).map(|s| (s.wo, s.pdf)),
+                        m.sample_direction_steps(wi, u, steps),
+                    )
+                };
+                let plain = |wi: Vec3, u: Vec2| {
+                    (
+                        twin.sample_steps(wi, u, steps).map(|s| (s.wo, s.pdf)),
+                        twin.sample_direction_steps(wi, u, steps),
+                    )
+                };
+                let pdf = |wi: Vec3, wo: Vec3| m.pdf_steps(wi, wo, steps);
+                let twin_pdf = |wi: Vec3, wo: Vec3| twin.pdf_steps(wi, wo, steps);
+                let wi = direction(a, b, $upper);
+                check(fold, folded, plain, pdf, twin_pdf, wi, Vec2::new(u0, u1))?;
+            }
+        }
+    };
 }
+
+twin_test!(
+    folded_half_vector_is_its_twin_at_the_folded_wi,
+    random_folded_half_vector,
+    random_half_vector,
+    true
+);
+twin_test!(
+    folded_sphere_is_its_twin_at_the_folded_wi,
+    random_folded_sphere,
+    random_sphere,
+    false
+);
 
 /// The blob of `m` (f32).
 fn blob(m: &Model3x32) -> Vec<u8> {
