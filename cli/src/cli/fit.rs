@@ -193,8 +193,10 @@ pub struct FitArgs {
     /// otherwise.
     #[arg(long, value_enum)]
     pub coordinates: Option<CoordinatesArg>,
-    /// Condition on the full wi even when the material is isotropic (by default an
-    /// isotropic material is fitted in the incident frame: wi turned to phi = 0).
+    /// Condition on the full wi even when the material is isotropic or declares a symmetry
+    /// in the incident azimuth (by default an isotropic material is fitted in the incident
+    /// frame, wi turned to phi = 0, and such an anisotropic one with wi folded into half or
+    /// a quarter of the turn).
     #[arg(long)]
     pub ignore_isotropy: bool,
     /// Isotropic fits: fraction of the training wi drawn with theta_i uniform in angle
