@@ -1,4 +1,4 @@
-//! `diffbsdf sample` and `diffbsdf pdf` on a shipped blob, run as the built binary: the
+//! `diffbsdf sample`, `diffbsdf pdf` and `diffbsdf info` on shipped blobs, run as the built binary: the
 //! CSV and JSON parse, the PDF of each sampled direction equals the sampled PDF, and bad
 //! input fails with a non-zero status and a clear message.
 
@@ -285,6 +285,7 @@ fn corrupt_or_missing_blobs_fail_with_a_clear_message() {
         for args in [
             vec!["sample", p, "--wi", "0,0,1"],
             vec!["pdf", p, "--wi", "0,0,1", "--wo", "0,0,1"],
+            vec!["info", p],
         ] {
             let e = failure(&args);
             assert!(
@@ -300,4 +301,74 @@ fn corrupt_or_missing_blobs_fail_with_a_clear_message() {
         "{e}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `info --json` on every shipped blob says what the kernel's parse of it says: size,
+/// checksum, domain, precision, steps, shapes, parameters, incident frame and range.
+#[test]
+fn info_describes_every_shipped_blob() {
+    use diffbsdf::{AnyModel, IncidentFold, Precision};
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models");
+    let mut frames = std::collections::BTreeSet::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("dbsdf") {
+            continue;
+        }
+        let bytes = std::fs::read(&path).unwrap();
+        let def = *AnyModel::from_blob(&bytes).unwrap().def();
+        let v: Value =
+            serde_json::from_str(&ok(&["info", path.to_str().unwrap(), "--json"], None)).unwrap();
+        let crc = u32::from_le_bytes(bytes[bytes.len() - 4..].try_into().unwrap());
+        let frame = match (def.isotropic, def.fold) {
+            (true, _) => "isotropic",
+            (false, IncidentFold::None) => "every azimuth",
+            (false, IncidentFold::HalfTurn) => "half turn",
+            (false, IncidentFold::Quarter) => "quarter turn",
+        };
+        frames.insert(frame);
+        let what = path.display().to_string();
+        assert_eq!(v["name"], def.name.as_str(), "{what}");
+        assert_eq!(v["bytes"], bytes.len(), "{what}");
+        assert_eq!(v["crc32"], format!("{crc:08x}"), "{what}");
+        assert_eq!(v["domain"], def.domain.name(), "{what}");
+        let precision = if def.precision == Precision::F16 {
+            "f16"
+        } else {
+            "f32"
+        };
+        assert_eq!(v["precision"], precision, "{what}");
+        assert_eq!(v["default_steps"], def.default_steps, "{what}");
+        assert_eq!(v["params"], def.param_count(), "{what}");
+        assert_eq!(v["table_params"], def.table_len(), "{what}");
+        assert_eq!(
+            v["velocity_net"],
+            serde_json::json!([
+                def.velocity.hidden_layers,
+                def.velocity.width,
+                def.velocity.freqs
+            ]),
+            "{what}"
+        );
+        assert_eq!(v["incident_frame"], frame, "{what}");
+        assert_eq!(
+            v["latent_table"] == "none",
+            def.latent_table.is_none(),
+            "{what}"
+        );
+        let text = ok(&["info", path.to_str().unwrap()], None);
+        assert!(
+            text.contains(&format!(
+                "model \"{}\": {} bytes",
+                def.name.as_str(),
+                bytes.len()
+            )),
+            "{what}: {text}"
+        );
+    }
+    // The shipped models include isotropic ones and the folded anisotropic copper.
+    assert!(
+        frames.contains("isotropic") && frames.contains("quarter turn"),
+        "{frames:?}"
+    );
 }

@@ -10,6 +10,25 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+static const char *domain_name(uint32_t domain) {
+    switch (domain) {
+    case 0: return "BRDF (disk)";
+    case 1: return "BSDF (sphere)";
+    case 2: return "BSDF (equatorial sphere)";
+    case 3: return "BRDF (half vector)";
+    default: return "unknown domain";
+    }
+}
+
+static const char *fold_name(uint32_t fold) {
+    switch (fold) {
+    case 0: return "every incident azimuth";
+    case 1: return "incident azimuths folded by a half turn";
+    case 2: return "incident azimuths folded into a quarter turn";
+    default: return "unknown fold";
+    }
+}
+
 int main(int argc, char **argv) {
     FILE *f;
     long len;
@@ -43,8 +62,8 @@ int main(int argc, char **argv) {
         return 1;
     }
     diffbsdf_model_info(model, &info);
-    printf("diffbsdf %s, model \"%s\": %s, %u default steps\n", diffbsdf_version_string(), info.name,
-           info.domain == 0 ? "BRDF (disk)" : "BSDF (sphere)", info.default_steps);
+    printf("diffbsdf %s, model \"%s\": %s, %s, %u default steps\n", diffbsdf_version_string(), info.name,
+           domain_name(info.domain), fold_name(info.incident_fold), info.default_steps);
 
     for (i = 0; i < 8; i++) {
         /* A stratified u; a renderer would use its sampler here. */

@@ -87,6 +87,10 @@ typedef struct diffbsdf_info {
     uint32_t isotropic;              /**< 1: nets see wi turned to phi = 0 (isotropic BSDF). */
     uint32_t incident_range;         /**< 0: wi.z >= 0 only (other wi: no sample, PDF 0);
                                           1: the whole sphere. */
+    uint32_t incident_fold;          /**< The incident azimuths the nets see: 0 all; 1 half the
+                                          turn (material unchanged by a half turn about the
+                                          normal); 2 a quarter (unchanged by mirroring x and
+                                          by mirroring y). Calls fold and unfold by themselves. */
     char name[33];                   /**< The model's name, NUL-terminated. */
 } diffbsdf_info;
 

@@ -29,7 +29,7 @@ pub use status::diffbsdf_status;
 use core::ffi::c_char;
 use core::mem::{align_of, size_of};
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::{IncidentRange, Precision, Sample};
+use diffbsdf::{IncidentFold, IncidentRange, Precision, Sample};
 use parallel::Rows;
 use status::diffbsdf_status as S;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -53,7 +53,7 @@ pub struct diffbsdf_sample_result {
 #[derive(Clone, Copy, Debug)]
 pub struct diffbsdf_info {
     /// 0: disk (BRDF, upper hemisphere), 1: sphere (full BSDF), 2: equatorial sphere (pole
-    /// on the tangent y axis).
+    /// on the tangent y axis), 3: half vector on the disk (BRDF, upper hemisphere).
     pub domain: u32,
     /// 0: f32 weights, 1: f16 weights in the blob.
     pub precision: u32,
@@ -67,6 +67,11 @@ pub struct diffbsdf_info {
     /// The `wi` the model answers: 0 above the surface only (`wi.z >= 0`; other `wi` give
     /// no sample and PDF 0), 1 the whole sphere.
     pub incident_range: u32,
+    /// The incident azimuths the nets see (docs/math.md, (83)): 0 every azimuth, 1 half
+    /// the turn (a symmetry under a half turn about the normal), 2 a quarter (mirror
+    /// symmetries in `x` and in `y`). Sampling and the PDF fold and unfold by themselves;
+    /// this says which symmetry the model assumes of the material.
+    pub incident_fold: u32,
     /// The model's name, NUL-terminated.
     pub name: [c_char; NAME_CAPACITY + 1],
 }
@@ -301,6 +306,11 @@ pub unsafe extern "C" fn diffbsdf_model_info(
             incident_range: match def.incident {
                 IncidentRange::UpperHemisphere => 0,
                 IncidentRange::WholeSphere => 1,
+            },
+            incident_fold: match def.fold {
+                IncidentFold::None => 0,
+                IncidentFold::HalfTurn => 1,
+                IncidentFold::Quarter => 2,
             },
             name,
         };

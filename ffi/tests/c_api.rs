@@ -106,6 +106,149 @@ fn header_agrees_with_the_kernel_definition() {
     }
 }
 
+/// The header's structs as gcc lays them out: size, alignment and every field's offset
+/// equal the Rust definitions' (a field added on one side only fails here).
+#[test]
+fn header_structs_have_the_rust_layout() {
+    use diffbsdf_ffi::{diffbsdf_info, diffbsdf_sample_result};
+    use std::mem::{align_of, offset_of, size_of};
+    let dir = scratch("ffi_layout");
+    let src = dir.join("layout.c");
+    let info_fields = [
+        ("domain", offset_of!(diffbsdf_info, domain)),
+        ("precision", offset_of!(diffbsdf_info, precision)),
+        ("default_steps", offset_of!(diffbsdf_info, default_steps)),
+        (
+            "velocity_hidden_layers",
+            offset_of!(diffbsdf_info, velocity_hidden_layers),
+        ),
+        ("velocity_width", offset_of!(diffbsdf_info, velocity_width)),
+        ("param_count", offset_of!(diffbsdf_info, param_count)),
+        ("isotropic", offset_of!(diffbsdf_info, isotropic)),
+        ("incident_range", offset_of!(diffbsdf_info, incident_range)),
+        ("incident_fold", offset_of!(diffbsdf_info, incident_fold)),
+        ("name", offset_of!(diffbsdf_info, name)),
+    ];
+    let sample_fields = [
+        ("wo", offset_of!(diffbsdf_sample_result, wo)),
+        ("pdf", offset_of!(diffbsdf_sample_result, pdf)),
+    ];
+    let mut c = String::from(
+        "#include <stddef.h>\n#include <stdio.h>\n#include \"diffbsdf.h\"\nint main(void) {\n",
+    );
+    let mut want = Vec::new();
+    for (ty, size, align, fields) in [
+        (
+            "diffbsdf_info",
+            size_of::<diffbsdf_info>(),
+            align_of::<diffbsdf_info>(),
+            &info_fields[..],
+        ),
+        (
+            "diffbsdf_sample_result",
+            size_of::<diffbsdf_sample_result>(),
+            align_of::<diffbsdf_sample_result>(),
+            &sample_fields[..],
+        ),
+    ] {
+        c += &format!("    printf(\"{ty} size %zu\\n\", sizeof({ty}));\n");
+        c += &format!("    printf(\"{ty} align %zu\\n\", _Alignof({ty}));\n");
+        want.push(format!("{ty} size {size}"));
+        want.push(format!("{ty} align {align}"));
+        for (field, offset) in fields {
+            c += &format!("    printf(\"{ty}.{field} %zu\\n\", offsetof({ty}, {field}));\n");
+            want.push(format!("{ty}.{field} {offset}"));
+        }
+    }
+    c += "    return 0;\n}\n";
+    std::fs::write(&src, c).expect("write");
+    let exe = dir.join("layout");
+    let mut cmd = Command::new("gcc");
+    cmd.args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+        .arg(crate_dir().join("include"))
+        .arg(&src)
+        .arg("-o")
+        .arg(&exe);
+    run_tool(&mut cmd, GCC_HINT);
+    let got = run_tool(&mut Command::new(&exe), "");
+    let got: Vec<&str> = got.lines().collect();
+    assert_eq!(
+        got, want,
+        "the header's layout differs from the Rust structs"
+    );
+}
+
+/// `diffbsdf_model_info` says what each conformance model's definition says (the folded
+/// and unfolded, isotropic and anisotropic, f32 and f16 random models).
+#[test]
+fn info_describes_each_model() {
+    use diffbsdf::{AnyModel, IncidentFold, IncidentRange, Precision};
+    use diffbsdf_ffi::*;
+    let mut folds = [0usize; 3];
+    for model in test_models() {
+        let any = AnyModel::from_blob(&model.blob).expect("blob loads");
+        let def = any.def();
+        let mut status = -100;
+        // SAFETY: a valid blob and status pointer; the model is freed below.
+        let m = unsafe { diffbsdf_model_new(model.blob.as_ptr(), model.blob.len(), &mut status) };
+        assert!(!m.is_null() && status == 0, "{}: {status}", model.name);
+        let mut info = std::mem::MaybeUninit::<diffbsdf_info>::uninit();
+        // SAFETY: a loaded model and a writable struct.
+        let info = unsafe {
+            assert_eq!(
+                diffbsdf_model_info(m, info.as_mut_ptr()),
+                diffbsdf_status::DIFFBSDF_OK
+            );
+            diffbsdf_model_free(m);
+            info.assume_init()
+        };
+        let fold = match def.fold {
+            IncidentFold::None => 0,
+            IncidentFold::HalfTurn => 1,
+            IncidentFold::Quarter => 2,
+        };
+        folds[fold as usize] += 1;
+        let name: Vec<u8> = info
+            .name
+            .iter()
+            .take_while(|&&c| c != 0)
+            .map(|&c| c as u8)
+            .collect();
+        assert_eq!(
+            (
+                info.domain,
+                info.precision,
+                info.default_steps,
+                info.velocity_hidden_layers,
+                info.velocity_width,
+                info.param_count,
+                info.isotropic,
+                info.incident_range,
+                info.incident_fold,
+                name.as_slice(),
+            ),
+            (
+                u32::from(def.domain.code()),
+                u32::from(def.precision == Precision::F16),
+                def.default_steps as u32,
+                def.velocity.hidden_layers as u32,
+                def.velocity.width as u32,
+                def.param_count() as u32,
+                u32::from(def.isotropic),
+                u32::from(def.incident == IncidentRange::WholeSphere),
+                fold,
+                def.name.as_bytes(),
+            ),
+            "{}",
+            model.name
+        );
+    }
+    assert!(
+        folds.iter().all(|&n| n > 0),
+        "every fold among the models: {folds:?}"
+    );
+}
+
 #[test]
 fn header_lists_every_status() {
     let header = std::fs::read_to_string(crate_dir().join("include/diffbsdf.h")).expect("header");
@@ -225,5 +368,9 @@ fn example_program_runs() {
             "{out}"
         );
         assert!(out.contains("pdf"), "{out}");
+        assert!(
+            !out.contains("unknown"),
+            "the example names every domain and fold: {out}"
+        );
     }
 }

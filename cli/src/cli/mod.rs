@@ -9,6 +9,7 @@ pub mod demo;
 pub mod depth;
 pub mod eval;
 pub mod fit;
+pub mod info;
 pub mod material;
 pub mod refine;
 pub mod share;
@@ -38,6 +39,8 @@ pub enum Command {
     Sample(blob::SampleArgs),
     /// The PDF of given directions under a weight blob (`--wo -`: rows from stdin).
     Pdf(blob::PdfArgs),
+    /// What a weight blob is: its definition, size and checksum.
+    Info(info::InfoArgs),
     /// Train a sampler for a material and write its blob.
     Fit(Box<fit::FitArgs>),
     /// Measure a blob's sampling quality against a material.
@@ -66,7 +69,7 @@ pub enum CliError {
     Train(fit::CommandError),
     /// A codegen command failed.
     Codegen(codegen::CodegenError),
-    /// A sample or pdf command failed.
+    /// A sample, pdf or info command failed.
     Blob(blob::BlobCommandError),
 }
 
@@ -89,6 +92,7 @@ pub fn run(cli: Cli, out: &mut dyn std::io::Write) -> Result<(), CliError> {
         Command::Material(c) => material::run(c, out).map_err(CliError::Material),
         Command::Sample(a) => blob::run_sample(a, out).map_err(CliError::Blob),
         Command::Pdf(a) => blob::run_pdf(a, out).map_err(CliError::Blob),
+        Command::Info(a) => info::run(&a, out).map_err(CliError::Blob),
         Command::Fit(a) => fit::run(*a, out).map_err(CliError::Train),
         Command::Eval(a) => eval::run(a, out).map_err(CliError::Train),
         Command::Refine(a) => refine::run(a, out).map_err(CliError::Train),
