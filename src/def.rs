@@ -104,6 +104,17 @@ pub enum IncidentFold {
 }
 
 impl IncidentFold {
+    /// The fold's code in the C ABI's `diffbsdf_info.incident_fold`: 0 none, 1 a half
+    /// turn, 2 a quarter.
+    #[must_use]
+    pub const fn code(self) -> u8 {
+        match self {
+            IncidentFold::None => 0,
+            IncidentFold::HalfTurn => 1,
+            IncidentFold::Quarter => 2,
+        }
+    }
+
     /// The signs `(sx, sy)` that fold a `wi` with tangent part `(x, y)` into the kept part
     /// of the turn (docs/math.md, (83)): `-1` where the coordinate is `>= 0` (so `-0`
     /// counts as `>= 0`), for both from `y` on a half turn, each from its own on a

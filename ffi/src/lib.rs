@@ -29,7 +29,7 @@ pub use status::diffbsdf_status;
 use core::ffi::c_char;
 use core::mem::{align_of, size_of};
 use diffbsdf::glam::{Vec2, Vec3};
-use diffbsdf::{IncidentFold, IncidentRange, Precision, Sample};
+use diffbsdf::{IncidentRange, Precision, Sample};
 use parallel::Rows;
 use status::diffbsdf_status as S;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -307,11 +307,7 @@ pub unsafe extern "C" fn diffbsdf_model_info(
                 IncidentRange::UpperHemisphere => 0,
                 IncidentRange::WholeSphere => 1,
             },
-            incident_fold: match def.fold {
-                IncidentFold::None => 0,
-                IncidentFold::HalfTurn => 1,
-                IncidentFold::Quarter => 2,
-            },
+            incident_fold: u32::from(def.fold.code()),
             name,
         };
         // SAFETY: non-null and aligned (checked), writable by contract.

@@ -202,11 +202,17 @@ fn info_describes_each_model() {
             diffbsdf_model_free(m);
             info.assume_init()
         };
-        let fold = match def.fold {
-            IncidentFold::None => 0,
-            IncidentFold::HalfTurn => 1,
-            IncidentFold::Quarter => 2,
-        };
+        let fold = u32::from(def.fold.code());
+        // The codes the header documents: 1 a half turn, 2 a quarter.
+        assert_eq!(
+            (
+                def.fold == IncidentFold::HalfTurn,
+                def.fold == IncidentFold::Quarter
+            ),
+            (info.incident_fold == 1, info.incident_fold == 2),
+            "{}",
+            model.name
+        );
         folds[fold as usize] += 1;
         let name: Vec<u8> = info
             .name
