@@ -102,12 +102,13 @@ fn kernel(c: &mut Criterion) {
     bench_model(c, "disk_3x32", disk, true);
     let sphere: [(&str, Model4x32); 2] = shipped("conductor-ggx-a0.3-cu-sphere");
     bench_model(c, "sphere_4x32", sphere, true);
-    // The half-vector chart (the default for BRDFs): in warped standard coordinates (the
-    // default since 2026-12-04) and in uncompressed ones, same shape and step count.
-    let warped: [(&str, Model3x32); 2] = shipped("rgl-vch-golden-yellow-hv");
-    bench_model(c, "half_vector_3x32_warped", warped, true);
-    let standard: [(&str, Model3x32); 2] = shipped("conductor-ggx-a0.3-cu-hv");
-    bench_model(c, "half_vector_3x32_standard", standard, true);
+    // The half-vector chart (the default for BRDFs), warped standard coordinates and the
+    // latent table: a measured material and an analytic one, same shape and step count
+    // (their Newton iteration counts in `pdf` differ).
+    let measured: [(&str, Model3x32); 2] = shipped("rgl-vch-golden-yellow-hv");
+    bench_model(c, "half_vector_3x32_golden_yellow", measured, true);
+    let analytic: [(&str, Model3x32); 2] = shipped("conductor-ggx-a0.3-cu-hv");
+    bench_model(c, "half_vector_3x32_copper", analytic, true);
 }
 
 criterion_group!(benches, kernel);
