@@ -10,6 +10,7 @@ use crate::tradeoff::{
 use clap::Args;
 use diffbsdf::AnyModel;
 use diffbsdf_materials::parse_spec;
+use diffbsdf_train::metrics::cost;
 use diffbsdf_train::metrics::kl::KlGrid;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -116,6 +117,7 @@ pub fn run(args: TradeoffArgs, out: &mut dyn std::io::Write) -> Result<(), Comma
                 command: command_line(&args),
                 samples: cfg.samples,
                 timing_calls: cfg.timing_calls,
+                timing_rounds: cost::TIMING_ROUNDS,
                 cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
                 points,
             }
@@ -124,10 +126,14 @@ pub fn run(args: TradeoffArgs, out: &mut dyn std::io::Write) -> Result<(), Comma
     let points = &record.points;
     std::fs::create_dir_all(&args.out).map_err(|e| CommandError::Io(args.out.clone(), e))?;
     let md = format!(
-        "# What accuracy costs in time\n\nProduced by `{}` ({} samples per `wi` and sampler, {} timed calls per entry point, {} logical cores; metrics as defined in `docs/math.md`, \"Metrics\"). Plot: [tradeoff.svg](tradeoff.svg) (x: time of a direction + PDF over the material's own sample; y: mean RV; open circles: the material's own sampler at x = 1; f16 curves thin with triangles). PDF slices, labelled: `slices/NAME.svg` (the bare images: `slices/NAME.png`).\n\n![accuracy vs time](tradeoff.svg)\n\n{}",
+        "# What accuracy costs in time\n\nProduced by `{}` ({} samples per `wi` and sampler, {} timed calls per entry point{}, {} logical cores; metrics as defined in `docs/math.md`, \"Metrics\"). Plot: [tradeoff.svg](tradeoff.svg) (x: time of a direction + PDF over the material's own sample; y: mean RV; open circles: the material's own sampler at x = 1; f16 curves thin with triangles). PDF slices, labelled: `slices/NAME.svg` (the bare images: `slices/NAME.png`).\n\n![accuracy vs time](tradeoff.svg)\n\n{}",
         record.command,
         record.samples,
         record.timing_calls,
+        match record.timing_rounds {
+            0 | 1 => String::new(),
+            r => format!(" in {r} interleaved rounds, the median round"),
+        },
         record.cores,
         markdown::render(points, &args.headline)
     );

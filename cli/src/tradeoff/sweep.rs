@@ -110,6 +110,10 @@ pub struct SweepRecord {
     pub samples: usize,
     /// Calls timed per entry point.
     pub timing_calls: usize,
+    /// Interleaved rounds those calls were split into, the median round reported (0 in a
+    /// record written before the rounds: one pass).
+    #[serde(default)]
+    pub timing_rounds: usize,
     /// Logical cores of the machine.
     pub cores: usize,
     /// The points.
