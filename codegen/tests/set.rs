@@ -86,7 +86,15 @@ fn a_disk_only_set_has_one_group_and_no_sphere_code() {
 
 #[test]
 fn a_mixed_set_compiles_with_one_buffer_per_architecture() {
-    let mats = materials(&shipped_models());
+    // The shipped models and one in uncompressed standard coordinates (no shipped model
+    // keeps them since 2026-12-08; a renderer's set may still hold one).
+    let mut models = shipped_models();
+    models.extend(
+        test_models()
+            .into_iter()
+            .filter(|m| m.name == "random_half_vector_std"),
+    );
+    let mats = materials(&models);
     let direction = EntryPoints {
         direction: true,
         sample: false,
@@ -95,10 +103,11 @@ fn a_mixed_set_compiles_with_one_buffer_per_architecture() {
     for entry_points in [EntryPoints::ALL, direction] {
         let o = buffer_options(Language::Glsl, entry_points);
         let set = generate_set(&mats, &o).expect("generate");
-        // The shipped models: isotropic disk, isotropic sphere for every wi (dielectrics,
-        // principled), isotropic sphere above the surface only (copper), isotropic
-        // half-vector chart in warped standard coordinates (measured), in uncompressed
-        // ones (rough copper) and anisotropic half-vector chart (the anisotropic copper).
+        // Isotropic disk, isotropic sphere for every wi (dielectrics, principled),
+        // isotropic sphere above the surface only (copper), isotropic half-vector chart
+        // in warped standard coordinates (measured materials, rough copper), in
+        // uncompressed ones (the test model) and the anisotropic half-vector chart folded
+        // into a quarter turn (the anisotropic copper).
         assert_eq!(set.buffers.len(), 6, "one group per architecture");
         assert_eq!(
             set.buffers.iter().map(|b| b.binding).collect::<Vec<_>>(),
